@@ -1,0 +1,126 @@
+"""Command line: ``gomu run | report | validate | bench``."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+
+from framework.errors import InputError
+
+
+def _cmd_run(args) -> int:
+    from framework.study.config import load
+    from framework.study.runner import run_study, summary
+
+    cfg = load(args.config, args.set)
+    backend = "dask" if args.scheduler or args.dask else args.backend
+    tables = run_study(
+        cfg,
+        resume=args.resume,
+        figures=not args.no_figures,
+        backend=backend,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=False if args.quiet else None,
+    )
+    table = summary(tables)
+    if not table.empty:
+        with_pd = table.to_string(index=False, float_format=lambda v: f"{v:.4g}")
+        sys.stdout.write(with_pd + "\n")
+    sys.stdout.write(f"tables and figures in {cfg.output_dir()}\n")
+    return 0
+
+
+def _cmd_report(args) -> int:
+    from framework.plots import report
+
+    root = Path(args.results_dir)
+    if not root.exists():
+        raise InputError(f"results folder not found: {root}")
+    files = report(root)
+    for f in files:
+        sys.stdout.write(f"{f}\n")
+    return 0
+
+
+def _cmd_validate(args) -> int:
+    from framework.study.config import load
+    from framework.study.execute import build_problem
+    from framework.study.plan import plan
+
+    cfg = load(args.config, args.set)
+    specs = plan(cfg)
+    config = specs[0]["config"]
+    problem = build_problem(config)
+    for case in config.get("validation", []):
+        build_problem(config, structure_options=case["structure_options"], measured_cfg=case["measured"])
+    sys.stdout.write(
+        f"{args.config}: OK - {len(specs)} runs, structure {cfg.structure.name!r}, "
+        f"{problem.measured.n_modes} measured modes, parameters {problem.parameters.names}\n"
+    )
+    return 0
+
+
+def _cmd_bench(args) -> int:
+    from framework.bench import main as bench_main
+
+    return bench_main(args.structures, workers=args.workers, repeats=args.repeats)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="gomu", description="Model updating of civil structures with global optimization"
+    )
+    p.add_argument("-v", "--verbose", action="store_true", help="debug logging")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("run", help="run a study config")
+    r.add_argument("config")
+    r.add_argument(
+        "--set", action="append", default=[], metavar="KEY.PATH=VALUE", help="override a config field"
+    )
+    r.add_argument("--resume", action="store_true", help="keep stored runs and run only the missing ones")
+    r.add_argument("--backend", choices=["serial", "processes", "dask"], default=None)
+    r.add_argument("--workers", type=int, default=None)
+    r.add_argument("--scheduler", default=None, help="Dask scheduler address (implies --backend dask)")
+    r.add_argument("--dask", action="store_true", help="start an embedded local Dask cluster")
+    r.add_argument("--no-figures", action="store_true")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(fn=_cmd_run)
+
+    rep = sub.add_parser("report", help="regenerate all figures from a results folder's tables")
+    rep.add_argument("results_dir")
+    rep.set_defaults(fn=_cmd_report)
+
+    v = sub.add_parser("validate", help="check a config and its data without running anything")
+    v.add_argument("config")
+    v.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE")
+    v.set_defaults(fn=_cmd_validate)
+
+    b = sub.add_parser("bench", help="evaluations per second per structure and parallel speed-up")
+    b.add_argument("structures", nargs="*", default=["lab_frame_3dof"])
+    b.add_argument("--workers", type=int, default=2)
+    b.add_argument("--repeats", type=int, default=3)
+    b.set_defaults(fn=_cmd_bench)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    logging.basicConfig(
+        level=logging.DEBUG if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s"
+    )
+    try:
+        return args.fn(args)
+    except InputError as exc:
+        sys.stderr.write(f"gomu: error: {exc}\n")
+        return 2
+    except KeyboardInterrupt:
+        sys.stderr.write("gomu: interrupted; stored runs are kept - rerun with --resume\n")
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,164 @@
+"""Bring-your-own OpenSeesPy model: a build function plus measured DOFs and analysis options.
+
+The user writes ``build(values: dict[str, float]) -> object`` that creates the model in
+the OpenSees domain (nodes, elements, masses and, for a gravity analysis, a load pattern)
+from a dict of parameter values. :class:`OpenSeesModel` wipes the domain, calls the build
+function, optionally runs a static (gravity) analysis and keeps its state, solves the
+eigenproblem K phi = omega^2 M phi and reads the eigenvectors at the measured DOFs
+(f = omega / 2 pi). Every built-in OpenSees structure of the framework uses this path.
+
+The build function must be importable at module level (for process and Dask workers).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from framework.errors import MissingDependencyError, ModelEvaluationError
+from framework.models.base import ModalResult, full_theta
+from framework.parameters import ParameterSet
+
+log = logging.getLogger(__name__)
+
+#: OpenSees direction numbers of a 3D node with 6 DOFs.
+DIRECTIONS = {"ux": 1, "uy": 2, "uz": 3, "rx": 4, "ry": 5, "rz": 6}
+
+
+def ops_module():
+    """The openseespy module, imported lazily (it prints a banner and loads a big library)."""
+    try:
+        import openseespy.opensees as ops
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise MissingDependencyError(
+            "openseespy is required for OpenSees models: pip install openseespy (Python 3.12)"
+        ) from exc
+    return ops
+
+
+@dataclass(frozen=True)
+class GravityAnalysis:
+    """Options of the static analysis run before the eigen analysis.
+
+    The build function must define the loads (e.g. ``timeSeries('Constant', 1)``,
+    ``pattern('Plain', 1, 1)`` and nodal or element loads). The analysis is load-controlled
+    in ``steps`` increments with Newton iterations; the converged state is kept
+    (``loadConst``) so that the eigen analysis sees the deformed, stressed structure.
+    """
+
+    steps: int = 1
+    tolerance: float = 1e-8
+    max_iterations: int = 50
+    system: str = "UmfPack"
+    numberer: str = "RCM"
+    constraints: str = "Transformation"
+    algorithm: str = "Newton"
+
+
+@dataclass(frozen=True)
+class OpenSeesModel:
+    """A structural model defined by a user's OpenSeesPy build function.
+
+    build: ``build(values) -> info``; values holds every parameter (initial values
+    overridden by the evaluated point) plus ``fixed``. measured_dofs: {label: (node tag,
+    direction)} with direction 1..6 or a name from :data:`DIRECTIONS`. n_modes: modes
+    to compute. gravity: :class:`GravityAnalysis` or None. solver: eigen solver flag
+    ("-genBandArpack", "-fullGenLapack", "-symmBandLapack"). postprocess: optional
+    ``postprocess(result, info, ops) -> ModalResult`` called while the domain is alive
+    (e.g. to classify modes by kinetic energy); ``info`` is what build returned.
+    dof_scale: optional {label: factor} applied to the shape rows (e.g. b/2 for a
+    rotation compared with translations).
+    """
+
+    build: Callable[[dict[str, float]], Any]
+    parameters: ParameterSet
+    measured_dofs: Mapping[str, tuple[int, int | str]]
+    n_modes: int = 10
+    gravity: GravityAnalysis | None = None
+    solver: str = "-genBandArpack"
+    fixed: Mapping[str, Any] = field(default_factory=dict)
+    postprocess: Callable[[ModalResult, Any, Any], ModalResult] | None = None
+    dof_scale: Mapping[str, float] = field(default_factory=dict)
+    name: str = "opensees"
+
+    def __post_init__(self) -> None:
+        if not callable(self.build):
+            raise TypeError(f"build must be callable, got {self.build!r}")
+        if self.n_modes < 1:
+            raise ValueError(f"n_modes must be >= 1, got {self.n_modes}")
+        resolved = {}
+        for label, (node, direction) in self.measured_dofs.items():
+            if isinstance(direction, str):
+                if direction not in DIRECTIONS:
+                    raise ValueError(
+                        f"measured DOF {label!r}: unknown direction {direction!r}; "
+                        f"use 1..6 or one of {list(DIRECTIONS)}"
+                    )
+                direction = DIRECTIONS[direction]
+            resolved[str(label)] = (int(node), int(direction))
+        object.__setattr__(self, "measured_dofs", resolved)
+
+    @property
+    def dofs(self) -> tuple[str, ...]:
+        return tuple(self.measured_dofs)
+
+    def modal(self, theta: Mapping[str, float]) -> ModalResult:
+        ops = ops_module()
+        values: dict[str, Any] = dict(self.fixed)
+        values.update(full_theta(self.parameters, theta))
+        ops.wipe()
+        try:
+            info = self.build(values)
+            if self.gravity is not None:
+                run_static(ops, self.gravity)
+            omega2 = eigen(ops, self.n_modes, self.solver)
+            freqs = np.sqrt(np.maximum(omega2, 0.0)) / (2.0 * math.pi)
+            shapes = np.empty((len(self.measured_dofs), len(freqs)))
+            for i, (label, (node, direction)) in enumerate(self.measured_dofs.items()):
+                scale = float(self.dof_scale.get(label, 1.0))
+                for j in range(len(freqs)):
+                    shapes[i, j] = scale * ops.nodeEigenvector(node, j + 1, direction)
+            result = ModalResult(freqs, shapes, self.dofs, meta={"omega2": omega2})
+            if self.postprocess is not None:
+                result = self.postprocess(result, info, ops)
+            return result
+        finally:
+            ops.wipe()
+
+
+def run_static(ops, options: GravityAnalysis) -> None:
+    """Load-controlled static analysis; raises ModelEvaluationError('not_converged')."""
+    ops.system(options.system)
+    ops.numberer(options.numberer)
+    ops.constraints(options.constraints)
+    ops.test("NormDispIncr", options.tolerance, options.max_iterations)
+    ops.algorithm(options.algorithm)
+    ops.integrator("LoadControl", 1.0 / options.steps)
+    ops.analysis("Static")
+    status = ops.analyze(options.steps)
+    if status != 0:
+        raise ModelEvaluationError(
+            "not_converged", f"static analysis returned {status} ({options.steps} steps)"
+        )
+    ops.loadConst("-time", 0.0)
+
+
+def eigen(ops, n_modes: int, solver: str = "-genBandArpack") -> np.ndarray:
+    """Eigenvalues omega^2 of the current domain; raises on failure or missing modes."""
+    try:
+        values = ops.eigen(solver, n_modes) if solver else ops.eigen(n_modes)
+    except Exception as exc:  # openseespy raises OpenSeesError
+        raise ModelEvaluationError("eigen_failed", str(exc)) from exc
+    values = np.atleast_1d(np.asarray(values, dtype=float))
+    if values.size < n_modes:
+        raise ModelEvaluationError("too_few_modes", f"got {values.size} of {n_modes} modes")
+    if not np.all(np.isfinite(values)):
+        raise ModelEvaluationError("eigen_failed", f"non-finite eigenvalues {values.tolist()}")
+    if np.any(values < -1e-6 * max(1.0, float(np.max(np.abs(values))))):
+        raise ModelEvaluationError("indefinite_matrix", f"negative eigenvalue {values.min():.4g}")
+    return values
