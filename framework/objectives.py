@@ -175,6 +175,25 @@ FORMULATIONS: dict[str, Formulation] = {
 }
 
 
+#: Formulations defined in other modules, imported on first use: name -> "module:attribute".
+LAZY_FORMULATIONS: dict[str, str] = {
+    "reference": "framework.reference_formulation:FORMULATION",
+}
+
+
+def get_formulation(name: str) -> Formulation:
+    """The formulation called ``name`` (built-in, registered, or lazily imported)."""
+    if name not in FORMULATIONS and name in LAZY_FORMULATIONS:
+        import importlib
+
+        module, attr = LAZY_FORMULATIONS[name].split(":")
+        FORMULATIONS[name] = getattr(importlib.import_module(module), attr)
+    if name not in FORMULATIONS:
+        known = sorted(set(FORMULATIONS) | set(LAZY_FORMULATIONS))
+        raise InputError(f"objective.formulation {name!r} unknown; known: {known}")
+    return FORMULATIONS[name]
+
+
 def register_formulation(name: str, formulation: Formulation) -> None:
     """Make a residual formulation selectable as ObjectiveSpec(formulation=name)."""
     FORMULATIONS[name] = formulation

@@ -26,10 +26,10 @@ from framework.errors import InputError, ModelEvaluationError
 from framework.measurements import MeasuredModes
 from framework.models.base import ModalResult, StructuralModel, modal_many
 from framework.objectives import (
-    FORMULATIONS,
     ModeCorrelation,
     ObjectiveSpec,
     check_constraints,
+    get_formulation,
     n_penalty_residuals,
     penalty_residuals,
 )
@@ -107,7 +107,7 @@ class UpdatingProblem:
         self.spec = objective if objective is not None else ObjectiveSpec()
         self.runner = runner
         self.name = name or getattr(model, "name", type(model).__name__)
-        self.formulation = FORMULATIONS[self.spec.formulation]
+        self.formulation = get_formulation(self.spec.formulation)
         check_constraints(self.parameters, self.spec)
         unknown_params = sorted(set(self.parameters.names) - set(model.parameters.names))
         if unknown_params:
