@@ -113,7 +113,12 @@ class OpenSeesModel:
         values.update(full_theta(self.parameters, theta))
         ops.wipe()
         try:
-            info = self.build(values)
+            try:
+                info = self.build(values)
+            except ModelEvaluationError:
+                raise
+            except Exception as exc:  # a user's build function can raise anything
+                raise ModelEvaluationError("build_failed", f"{type(exc).__name__}: {exc}") from exc
             if self.gravity is not None:
                 run_static(ops, self.gravity)
             omega2 = eigen(ops, self.n_modes, self.solver)

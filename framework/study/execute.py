@@ -92,6 +92,7 @@ def _mode_rows(base: dict, case: str, problem: UpdatingProblem, theta: np.ndarra
         table = problem.mode_table(theta)
     except ModelEvaluationError as exc:
         return [{**base, "case": case, "mode": 0, "error": str(exc)}]
+    table = table.rename(columns={"label": "mode_label"})
     return [{**base, "case": case, **row} for row in table.to_dict("records")]
 
 
