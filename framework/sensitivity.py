@@ -7,7 +7,8 @@ With a forward difference of relative step h on parameter p_j (n + 1 model runs)
     S_MAC[i, j] = (MAC_i(p + h p_j e_j) - MAC_i(p)) / h             (dMAC per dp/p)
 
 (a parameter whose value is 0 is stepped by h times its bound width and reported per
-that absolute step). From the stacked matrix S = [S_f; S_MAC]: singular values, condition
+that absolute step; a parameter whose forward step would leave its upper bound is stepped
+backwards, a backward difference, so the step is never clipped away). From the stacked matrix S = [S_f; S_MAC]: singular values, condition
 number s_max / s_min, and the parameter correlation implied by a linearized
 least-squares fit, C = (S^T S)^+, rho_jk = C_jk / sqrt(C_jj C_kk); |rho| near 1 means the
 data cannot tell the two parameters apart.
@@ -57,6 +58,8 @@ def sensitivity_matrix(problem, theta0: np.ndarray | None = None, rel_step: floa
     for j, p in enumerate(params):
         t = theta0.copy()
         step = rel_step * theta0[j] if theta0[j] != 0 else rel_step * p.span
+        if t[j] + step > p.upper:
+            step = -step
         t[j] += step
         points.append(t)
         steps.append(step)

@@ -115,8 +115,9 @@ class AlgorithmConfig(_Strict):
         except ValidationError as exc:
             first = exc.errors()[0]
             loc = ".".join(str(p) for p in first["loc"])
+            msg = "unknown key" if first["type"] == "extra_forbidden" else first["msg"]
             raise ValueError(
-                f"settings.{loc}: {first['msg']} (value {first.get('input')!r}) for algorithm {self.algorithm!r}"
+                f"settings.{loc}: {msg} (value {first.get('input')!r}) for algorithm {self.algorithm!r}"
             ) from None
         try:
             Budget(**self.budget)
