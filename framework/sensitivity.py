@@ -8,10 +8,12 @@ With a forward difference of relative step h on parameter p_j (n + 1 model runs)
 
 (a parameter whose value is 0 is stepped by h times its bound width and reported per
 that absolute step; a parameter whose forward step would leave its upper bound is stepped
-backwards, a backward difference, so the step is never clipped away). From the stacked matrix S = [S_f; S_MAC]: singular values, condition
-number s_max / s_min, and the parameter correlation implied by a linearized
-least-squares fit, C = (S^T S)^+, rho_jk = C_jk / sqrt(C_jj C_kk); |rho| near 1 means the
-data cannot tell the two parameters apart.
+backwards, a backward difference, so the step is never clipped away).
+
+From the stacked matrix S = [S_f; S_MAC]: singular values, condition number s_max / s_min,
+and the parameter correlation implied by a linearized least-squares fit,
+C = (S^T S)^+, rho_jk = C_jk / sqrt(C_jj C_kk); |rho| near 1 means the data cannot tell
+the two parameters apart.
 """
 
 from __future__ import annotations
