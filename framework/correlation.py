@@ -144,7 +144,7 @@ def pair_modes(
 
     method "mac": one-to-one assignment maximizing the summed MAC (Hungarian algorithm)
     among candidates within ``frequency_window`` (relative, e.g. 0.3 = +-30 %); pairs
-    below ``mac_threshold`` are unmatched. method "order": measured mode j with analytical
+    below ``mac_threshold`` or outside the window are unmatched. method "order": measured mode j with analytical
     mode j. method "frequency": nearest frequency, one-to-one. Without shapes only
     "order" and "frequency" are possible, and every pair counts as matched.
     """
@@ -184,11 +184,80 @@ def pair_modes(
     if mm is not None:
         mac_pair[valid] = mm[np.flatnonzero(valid), idx[valid]]
         matched = valid & (mac_pair >= mac_threshold)
-        if method == "mac" and frequency_window is not None:
-            inside = np.zeros(m_e, dtype=bool)
-            inside[valid] = np.abs(fa[idx[valid]] - fe[valid]) / fe[valid] <= frequency_window
-            matched &= inside
     else:
         matched = valid.copy()
+    if method != "order" and frequency_window is not None:
+        inside = np.zeros(m_e, dtype=bool)
+        inside[valid] = np.abs(fa[idx[valid]] - fe[valid]) / fe[valid] <= frequency_window
+        matched &= inside
     final = np.where(matched, idx, -1)
     return Pairing(final, best, mac_pair, matched, mm)
+
+
+def mac_matrix_batch(phi_a: np.ndarray, phi_e: np.ndarray) -> np.ndarray:
+    """MAC matrices of a population: phi_a (n, n_dof, m_a), phi_e (n_dof, m_e) -> (n, m_e, m_a).
+
+    Zero-norm analytical modes get MAC 0 (they can never be matched)."""
+    cross = np.abs(np.einsum("dk,ndj->nkj", phi_e.conj(), phi_a)) ** 2
+    ne = np.sum(np.abs(phi_e) ** 2, axis=0)
+    na = np.sum(np.abs(phi_a) ** 2, axis=1)
+    den = ne[None, :, None] * na[:, None, :]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.clip(np.where(den > 0, cross / np.where(den > 0, den, 1.0), 0.0), 0.0, 1.0)
+
+
+_MAX_ASSIGNMENTS = 5040
+
+
+def assignments(m_e: int, m_a: int) -> np.ndarray | None:
+    """All one-to-one maps of m_e measured to m_a analytical modes (rows), or None if too many."""
+    import itertools
+    import math
+
+    if m_e > m_a or math.perm(m_a, m_e) > _MAX_ASSIGNMENTS:
+        return None
+    return np.array(list(itertools.permutations(range(m_a), m_e)), dtype=int).reshape(-1, m_e)
+
+
+def pair_modes_batch(f_a: np.ndarray, f_e: np.ndarray, mm: np.ndarray | None, *, mac_threshold: float = 0.5,
+                     frequency_window: float | None = None, method: str = "mac"):
+    """Vectorized :func:`pair_modes` for a population; f_a (n, m_a), mm (n, m_e, m_a) or None.
+
+    Enumerates every one-to-one assignment (exact, like the Hungarian algorithm) and keeps
+    the one of largest total score. Returns (index (n, m_e) with -1 unmatched, mac (n, m_e),
+    matched (n, m_e)), or None when the sizes are too large for enumeration.
+    """
+    n, m_a = f_a.shape
+    m_e = f_e.size
+    if method == "mac" and mm is None:
+        method = "frequency"
+    if method == "order":
+        if m_a < m_e:
+            return None
+        idx = np.tile(np.arange(m_e), (n, 1))
+    else:
+        P = assignments(m_e, m_a)
+        if P is None:
+            return None
+        rel = np.abs(f_a[:, None, :] - f_e[None, :, None]) / f_e[None, :, None]  # (n, m_e, m_a)
+        if method == "mac":
+            score = mm.copy()
+            if frequency_window is not None:
+                score = np.where(rel > frequency_window, -1.0, score)
+        else:
+            score = -rel
+            if frequency_window is not None:
+                score = np.where(rel > frequency_window, -1e9, score)
+        total = score[:, np.arange(m_e)[None, :], P].sum(axis=2)  # (n, n_assignments)
+        idx = P[np.argmax(total, axis=1)]
+    rows = np.arange(n)[:, None]
+    cols = np.arange(m_e)[None, :]
+    if mm is None:
+        mac = np.full((n, m_e), np.nan)
+        matched = np.ones((n, m_e), dtype=bool)
+    else:
+        mac = mm[rows, cols, idx]
+        matched = mac >= mac_threshold
+    if method != "order" and frequency_window is not None:
+        matched &= np.abs(f_a[rows, idx] - f_e[None, :]) / f_e[None, :] <= frequency_window
+    return np.where(matched, idx, -1), mac, matched

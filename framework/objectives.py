@@ -143,6 +143,41 @@ def spec_residuals(result: ModalResult, measured: MeasuredModes, spec: Objective
     return np.concatenate([r_f, r_s]), corr
 
 
+def spec_residuals_batch(freqs: np.ndarray, shapes: np.ndarray, measured: MeasuredModes, spec: ObjectiveSpec):
+    """Vectorized :func:`spec_residuals` for a population with equal mode counts.
+
+    freqs (n, m_a), shapes (n, n_dof, m_a) already restricted to the measured DOFs (or None).
+    Returns residuals (n, r) and per-point ModeCorrelation, or None if the population is
+    too large to pair by enumeration (the caller then uses the per-point path).
+    """
+    from framework.correlation import mac_matrix_batch, pair_modes_batch
+
+    use_shapes = spec.use_shapes and measured.has_shapes
+    mm = mac_matrix_batch(shapes, measured.shapes) if use_shapes else None
+    method = spec.pairing if use_shapes else ("order" if spec.pairing == "order" else "frequency")
+    paired = pair_modes_batch(freqs, measured.frequencies_hz, mm, mac_threshold=spec.mac_threshold,
+                              frequency_window=spec.frequency_window, method=method)
+    if paired is None:
+        return None
+    idx, mac, matched = paired
+    fe = measured.frequencies_hz
+    n = freqs.shape[0]
+    fa = np.where(idx >= 0, freqs[np.arange(n)[:, None], np.maximum(idx, 0)], np.nan)
+    eps = (fa - fe) / fe
+    shape_term = use_shape_term(measured, spec)
+    unmatched = np.sqrt(spec.unmatched_penalty / (2.0 if shape_term else 1.0))
+    r_f = np.where(matched, np.sqrt(spec.alpha * measured.w_frequency) * np.nan_to_num(eps), unmatched)
+    if shape_term:
+        sq = np.sqrt(np.clip(np.nan_to_num(mac), 1e-12, 1.0))
+        r_s = np.where(matched, np.sqrt(spec.beta * measured.w_shape) * (1.0 - sq) / sq, unmatched)
+        r = np.concatenate([r_f, r_s], axis=1)
+    else:
+        r = r_f
+    mac_out = mac if use_shapes else np.full_like(eps, np.nan)
+    corrs = [ModeCorrelation(idx[i], fe, fa[i], eps[i], mac_out[i], matched[i]) for i in range(n)]
+    return r, corrs
+
+
 def use_shape_term(measured: MeasuredModes, spec: ObjectiveSpec) -> bool:
     return bool(spec.use_shapes and measured.has_shapes and spec.beta > 0)
 
@@ -168,10 +203,12 @@ class Formulation:
     n_residuals: Callable
     split: Callable
     objective_names: tuple[str, ...] = ("Pi_f", "Pi_MAC")
+    #: optional vectorized residuals(freqs (n, m), shapes (n, dof, m), measured, spec)
+    batch_residuals: Callable | None = None
 
 
 FORMULATIONS: dict[str, Formulation] = {
-    "spec": Formulation(spec_residuals, spec_n_residuals, spec_split),
+    "spec": Formulation(spec_residuals, spec_n_residuals, spec_split, batch_residuals=spec_residuals_batch),
 }
 
 

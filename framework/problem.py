@@ -170,10 +170,14 @@ class UpdatingProblem:
         correlations: list[ModeCorrelation | None] = [None] * n
         penalties = penalty_residuals(theta, X, self.parameters, self.spec)
         fail_value = np.sqrt(self.spec.failure_penalty / r)
+        batch = self._batch_residuals(results)
         for i, res in enumerate(results):
             if isinstance(res, ModalResult):
                 try:
-                    modal_r, corr = self.formulation.residuals(res, self.measured, self.spec)
+                    if batch is not None:
+                        modal_r, corr = batch[0][i], batch[1][i]
+                    else:
+                        modal_r, corr = self.formulation.residuals(res, self.measured, self.spec)
                     residuals[i, : self.n_modal_residuals] = modal_r
                     residuals[i, self.n_modal_residuals :] = penalties[i]
                     correlations[i] = corr
@@ -195,6 +199,24 @@ class UpdatingProblem:
         if record:
             self.log.record(X, objective, reasons, details)
         return Evaluations(objective, residuals, ok, reasons, correlations)
+
+    def _batch_residuals(self, results: list):
+        """Vectorized residuals when every point succeeded with the same modes, else None."""
+        fn = self.formulation.batch_residuals
+        if fn is None or len(results) < 2 or not all(isinstance(r, ModalResult) for r in results):
+            return None
+        n_modes = {r.n_modes for r in results}
+        if len(n_modes) != 1:
+            return None
+        use_shapes = self.spec.use_shapes and self.measured.has_shapes
+        try:
+            shapes = np.stack([r.at(self.measured.dofs) for r in results]) if use_shapes else None
+        except KeyError:
+            return None
+        if use_shapes and np.any(np.sum(shapes**2, axis=1) == 0):
+            return None  # the per-point path reports the zero-norm mode
+        freqs = np.stack([r.frequencies_hz for r in results])
+        return fn(freqs, shapes, self.measured, self.spec)
 
     def objective(self, X: np.ndarray) -> np.ndarray:
         """Scalar objective Pi for each row of X (n, k) -> (n,)."""

@@ -108,3 +108,38 @@ def test_pairing_frequency_window_and_order():
     np.testing.assert_array_equal(q.analytical_index, [0, 1])
     r = pair_modes([3.0, 1.0], [1.1, 2.9])  # no shapes: nearest frequency
     np.testing.assert_array_equal(r.analytical_index, [1, 0])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from(["mac", "frequency", "order"]),
+       st.sampled_from([None, 0.2, 0.5]), st.floats(0.0, 0.95))
+def test_batch_pairing_equals_single_pairing(seed, method, window, threshold):
+    from framework.correlation import mac_matrix_batch, pair_modes_batch
+
+    rng = np.random.default_rng(seed)
+    n, n_dof, m_a, m_e = 6, 4, 4, 3
+    fa = np.sort(rng.uniform(1, 10, (n, m_a)), axis=1)
+    fe = np.sort(rng.uniform(1, 10, m_e))
+    phi_a = rng.normal(size=(n, n_dof, m_a))
+    phi_e = rng.normal(size=(n_dof, m_e))
+    mm = mac_matrix_batch(phi_a, phi_e)
+    idx, mac_b, matched = pair_modes_batch(fa, fe, mm, mac_threshold=threshold, frequency_window=window,
+                                           method=method)
+    for i in range(n):
+        np.testing.assert_allclose(mm[i], mac_matrix(phi_a[i], phi_e), atol=1e-12)
+        p = pair_modes(fa[i], fe, phi_a[i], phi_e, mac_threshold=threshold, frequency_window=window, method=method)
+        np.testing.assert_array_equal(idx[i], p.analytical_index)
+        np.testing.assert_array_equal(matched[i], p.matched)
+
+
+def test_problem_batch_path_equals_single_path():
+    from framework.models.lab_frame import make_model, measured
+    from framework.objectives import ObjectiveSpec
+    from framework.problem import UpdatingProblem
+
+    X = np.random.default_rng(5).random((50, 6))
+    for spec in (ObjectiveSpec(), ObjectiveSpec(frequency_window=0.05, mac_threshold=0.99), ObjectiveSpec(beta=0)):
+        p = UpdatingProblem(make_model(), measured(), objective=spec)
+        batch = p.evaluate(X)
+        single = np.array([p.objective1(x) for x in X])
+        np.testing.assert_allclose(batch.objective, single, rtol=1e-12, atol=0)
