@@ -4,7 +4,9 @@
 convergence.png (best objective vs evaluations: median and 10-90 % band per label),
 parameters.png (ratio to initial value per parameter and label, one point per run),
 frequencies.png (updated vs measured frequency error and MAC per mode, base case),
-validation.png (predicted vs measured frequency error per validation case).
+validation.png (predicted vs measured frequency error per validation case),
+selection.png and convergence_summary.csv when the config has ``options.selection``
+(parameter-selection studies, :mod:`framework.study.selection`).
 """
 
 from __future__ import annotations
@@ -139,7 +141,23 @@ def report(results_dir: str | Path) -> list[Path]:
                 written.append(root / name)
         except Exception as exc:  # a figure must not lose the tables
             log.warning("figure %s failed: %s", name, exc)
+    selection = _config_options(root).get("selection")
+    if selection and "runs" in tables and "history" in tables:
+        from framework.study.selection import summarize
+
+        summarize(root, tolerance=selection.get("tolerance", 1e-5),
+                  reference_objective=selection.get("reference_objective"), title=root.name)
+        written.append(root / "selection.png")
     return written
+
+
+def _config_options(root: Path) -> dict:
+    import yaml
+
+    path = root / "config.yaml"
+    if not path.exists():
+        return {}
+    return (yaml.safe_load(path.read_text()) or {}).get("options") or {}
 
 
 def _save(fig, path: Path) -> None:

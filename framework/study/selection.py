@@ -1,0 +1,85 @@
+"""Parameter-selection analysis (SPEC 4): which settings converge, and how fast.
+
+The source counted a setting as converged when the mean best value of its 10 runs fell
+below 1e-5 (its minimum being ~1.3e-6). The minimum depends on the MAC convention, so here
+a setting is converged when the mean best value is within ``tolerance`` of the best value
+f* any method found (``reference_objective`` or the best run of the study):
+
+    converged  <=>  mean_r(best_r) - f* < tolerance
+
+Evaluations to converge: per run, the first evaluation whose best-so-far value is within
+``tolerance`` of f*; averaged over the runs that got there (``runs_reaching``).
+Iterations to converge scale these by the run's iterations per evaluation.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from framework.study.store import read_table, write_table
+
+
+def convergence_summary(runs: pd.DataFrame, history: pd.DataFrame, tolerance: float = 1e-5,
+                        reference_objective: float | None = None) -> pd.DataFrame:
+    """One row per label and variant: mean best, converged, evaluations/iterations to converge."""
+    f_star = float(np.nanmin(runs["objective"]))
+    if reference_objective is not None:
+        f_star = min(f_star, float(reference_objective))
+    threshold = f_star + tolerance
+    reach = (history[history["best_objective"] <= threshold].groupby("run_id")["evaluation"].min())
+    runs = runs.assign(evals_to_converge=runs["run_id"].map(reach))
+    per_eval = runs["n_iterations"] / runs["n_evaluations"].where(runs["n_evaluations"] > 0)
+    runs = runs.assign(iters_to_converge=runs["evals_to_converge"] * per_eval)
+    rows = []
+    for (label, variant), g in runs.groupby(["label", "variant"], sort=False):
+        mean_best = float(g["objective"].mean())
+        converged = bool(mean_best - f_star < tolerance)
+        rows.append({
+            "label": label, "variant": variant, "runs": len(g), "mean_best": mean_best,
+            "median_best": float(g["objective"].median()), "worst_best": float(g["objective"].max()),
+            "f_star": f_star, "tolerance": tolerance, "converged": converged,
+            "runs_reaching": int(g["evals_to_converge"].notna().sum()),
+            "mean_evaluations_to_converge": float(g["evals_to_converge"].mean()),
+            "mean_iterations_to_converge": float(g["iters_to_converge"].mean()),
+            "mean_evaluations": float(g["n_evaluations"].mean()),
+            "result": (f"{g['evals_to_converge'].mean():.0f} evaluations" if converged else "not converged"),
+        })
+    return pd.DataFrame(rows)
+
+
+def selection_figure(summary: pd.DataFrame, path: Path, title: str = "") -> None:
+    import matplotlib.pyplot as plt
+
+    df = summary.assign(setting=summary["label"] + " " + summary["variant"].astype(str))
+    fig, axes = plt.subplots(1, 2, figsize=(12, max(3.5, 0.35 * len(df) + 1.5)), sharey=True)
+    y = np.arange(len(df))
+    colors = np.where(df["converged"], "tab:blue", "tab:gray")
+    axes[0].barh(y, df["mean_evaluations_to_converge"].fillna(0), color=colors)
+    for i, (conv, val) in enumerate(zip(df["converged"], df["mean_evaluations_to_converge"])):
+        axes[0].text(0 if np.isnan(val) else val, i, "  not converged" if not conv else f"  {val:.0f}",
+                     va="center", fontsize=7)
+    axes[0].set(yticks=y, yticklabels=df["setting"], xlabel="mean evaluations to converge",
+                title="Evaluations to reach f* + tol (grey: not converged)")
+    axes[1].barh(y, df["mean_best"] - df["f_star"], color=colors)
+    axes[1].axvline(df["tolerance"].iloc[0], color="k", ls="--", lw=0.8)
+    axes[1].set(xscale="log", xlabel="mean best - f*", title="Mean best value above f*")
+    fig.suptitle(title)
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.stem}.tmp.png")
+    fig.savefig(tmp, dpi=130)
+    plt.close(fig)
+    tmp.replace(path)
+
+
+def summarize(results_dir: str | Path, tolerance: float = 1e-5, reference_objective: float | None = None,
+              title: str = "") -> pd.DataFrame:
+    """Write convergence_summary.csv/.parquet and selection.png from a study's tables."""
+    root = Path(results_dir)
+    summary = convergence_summary(read_table(root, "runs"), read_table(root, "history"), tolerance,
+                                  reference_objective)
+    write_table(summary, root / "convergence_summary")
+    selection_figure(summary, root / "selection.png", title)
+    return summary
