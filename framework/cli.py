@@ -63,6 +63,12 @@ def _cmd_validate(args) -> int:
     return 0
 
 
+def _cmd_diagnose(args) -> int:
+    from framework.discrepancy.workflow import diagnose_config
+
+    return diagnose_config(args.config, overrides=args.set, output=args.output)
+
+
 def _cmd_bench(args) -> int:
     from framework.bench import main as bench_main
 
@@ -98,6 +104,12 @@ def build_parser() -> argparse.ArgumentParser:
     v.add_argument("config")
     v.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE")
     v.set_defaults(fn=_cmd_validate)
+
+    d = sub.add_parser("diagnose", help="find, name and add the physical effect a model is missing")
+    d.add_argument("config")
+    d.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE")
+    d.add_argument("--output", default=None, help="results folder (default from the config)")
+    d.set_defaults(fn=_cmd_diagnose)
 
     b = sub.add_parser("bench", help="evaluations per second per structure and parallel speed-up")
     b.add_argument("structures", nargs="*", default=["lab_frame_3dof"])
