@@ -4,7 +4,14 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
+
+# Small dense eigenproblems and process-level parallelism: one BLAS thread per process is
+# much faster than a multi-threaded BLAS fighting for the same cores (measured up to 40x on
+# a loaded 2-core machine). Set before numpy is imported; an explicit user setting wins.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 from pathlib import Path
 
 from framework.errors import InputError
@@ -49,13 +56,12 @@ def _cmd_validate(args) -> int:
     from framework.study.config import load
     from framework.study.execute import build_problem
     from framework.study.plan import plan
+    from framework.study.runner import preflight
 
     cfg = load(args.config, args.set)
     specs = plan(cfg)
-    config = specs[0]["config"]
-    problem = build_problem(config)
-    for case in config.get("validation", []):
-        build_problem(config, structure_options=case["structure_options"], measured_cfg=case["measured"])
+    preflight(specs)
+    problem = build_problem(specs[0]["config"])
     sys.stdout.write(
         f"{args.config}: OK - {len(specs)} runs, structure {cfg.structure.name!r}, "
         f"{problem.measured.n_modes} measured modes, parameters {problem.parameters.names}\n"

@@ -23,6 +23,7 @@ MEASUREMENTS: dict[str, str] = {
     "lab_frame": "framework.models.lab_frame:measured",
     "bridge": "framework.models.bridge:measured",
     "beam": "framework.models.beam:measured",
+    "identified": "framework.identification.datasets:measured",
 }
 
 
