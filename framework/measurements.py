@@ -5,6 +5,7 @@ File formats (both read and written here):
 YAML ::
 
     name: lab_frame            # optional
+    units: {frequency: Hz}     # optional; only SI (Hz, damping ratio, m) is accepted
     dofs: [y, x, torsion]      # measured DOF labels, in the row order of the shapes
     modes:
       - label: 1st y           # optional
@@ -180,7 +181,9 @@ _MODE_KEYS = {
     "weight_frequency",
     "weight_shape",
 }
-_TOP_KEYS = {"name", "dofs", "modes", "meta"}
+_TOP_KEYS = {"name", "dofs", "modes", "meta", "units"}
+#: the only units accepted in data files (SI); anything else is an error, not a guess
+_UNITS = {"frequency": "Hz", "damping": "ratio", "shape": "m"}
 
 
 def from_dict(data: dict, source: str = "<dict>") -> MeasuredModes:
@@ -190,6 +193,16 @@ def from_dict(data: dict, source: str = "<dict>") -> MeasuredModes:
     unknown = sorted(set(data) - _TOP_KEYS)
     if unknown:
         raise InputError(f"{source}: unknown top-level key(s) {unknown}; allowed: {sorted(_TOP_KEYS)}")
+    units = data.get("units") or {}
+    if not isinstance(units, dict):
+        raise InputError(f"{source}: 'units' must be a mapping like {_UNITS}, got {units!r}")
+    for key, value in units.items():
+        if key not in _UNITS:
+            raise InputError(f"{source}: units.{key}: unknown quantity; known: {sorted(_UNITS)}")
+        if str(value) != _UNITS[key]:
+            raise InputError(
+                f"{source}: units.{key}: unsupported unit {value!r}; data files use {_UNITS[key]!r} (SI)"
+            )
     modes = data.get("modes")
     if not isinstance(modes, list) or not modes:
         raise InputError(f"{source}: 'modes' must be a non-empty list, got {modes!r}")

@@ -163,16 +163,33 @@ class ProcessRunner:
 
 
 class DaskRunner:
-    """Evaluate a population on a Dask cluster (one task per chunk, input order kept)."""
+    """Evaluate a population on a Dask cluster (one task per chunk, input order kept).
 
-    def __init__(self, client, chunks: int | None = None):
+    With ``client=None`` the runner must be called inside a Dask task: it uses
+    ``worker_client()``, which secedes the task from the worker's thread pool while it
+    waits, so a run executing on a worker can farm its population out to the same
+    cluster without deadlock.
+    """
+
+    def __init__(self, client=None, chunks: int | None = None):
         self.client = client
         self.chunks = chunks
 
+    def __getstate__(self):
+        return {"client": None, "chunks": self.chunks}
+
+    def _run(self, client, model, thetas):
+        n = self.chunks or max(1, len(client.scheduler_info().get("workers", {})))
+        futures = client.map(_evaluate_chunk, [(model, c) for c in _chunks(list(thetas), n)], pure=False)
+        return [r for part in client.gather(futures) for r in part]
+
     def __call__(self, model, thetas: Sequence[dict]) -> list:
-        n = self.chunks or max(1, len(self.client.scheduler_info().get("workers", {})))
-        futures = self.client.map(_evaluate_chunk, [(model, c) for c in _chunks(list(thetas), n)], pure=False)
-        return [r for part in self.client.gather(futures) for r in part]
+        if self.client is not None:
+            return self._run(self.client, model, thetas)
+        from distributed import worker_client
+
+        with worker_client() as client:
+            return self._run(client, model, thetas)
 
 
 def iter_items(items: Iterable) -> list:

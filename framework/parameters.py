@@ -103,6 +103,10 @@ class ParameterSet(Sequence[Parameter]):
         raise KeyError(f"no parameter named {name!r}; known: {self.names}")
 
     def subset(self, names: Iterable[str]) -> ParameterSet:
+        names = list(names)
+        unknown = [n for n in names if n not in self.names]
+        if unknown:
+            raise InputError(f"parameters.names: no parameter named {unknown[0]!r}; known: {self.names}")
         return ParameterSet(self.by_name(n) for n in names)
 
     # --- maps between normalized x, physical theta and ratios -----------------------

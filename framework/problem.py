@@ -60,6 +60,7 @@ class EvaluationLog:
         self.failure_examples: dict[str, str] = {}
         self.best_x: np.ndarray | None = None
         self.best_objective = np.inf
+        self.on_record = None  # optional callback(n_new_evaluations), e.g. a progress bar
 
     @property
     def n_evaluations(self) -> int:
@@ -81,6 +82,8 @@ class EvaluationLog:
         if i >= 0 and objective[i] < self.best_objective:
             self.best_objective = float(objective[i])
             self.best_x = np.array(X[i], dtype=float)
+        if self.on_record is not None:
+            self.on_record(len(objective))
 
     def best_so_far(self) -> np.ndarray:
         return np.minimum.accumulate(np.asarray(self.objectives)) if self.objectives else np.array([])

@@ -80,10 +80,9 @@ def test_bad_configs_fail_before_running(tmp_path, path, value, message):
 def test_unknown_parameter_name_in_bounds_is_reported(tmp_path):
     data = dict(SMALL, parameters={"bounds": {"kzz": [1, 2]}}, output=str(tmp_path / "out"))
     cfg = validate(data)
-    tables = run_study(cfg, figures=False)
-    runs = tables["runs"]
-    assert (runs["status"] == "error").all()
-    assert runs["error"].str.contains("bounds given for unknown parameters \\['kzz'\\]").all()
+    with pytest.raises(InputError, match="bounds given for unknown parameters \\['kzz'\\]"):
+        run_study(cfg, figures=False)
+    assert not (tmp_path / "out" / "_runs").exists()  # failed before any run started
 
 
 def test_cli_override_and_sweep_expand_to_a_grid(tmp_path):

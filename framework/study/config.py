@@ -133,6 +133,7 @@ class ExecutionConfig(_Strict):
     scheduler: str | None = None
     evaluation_backend: Literal["serial", "processes", "dask"] = "serial"
     progress: bool = True
+    progress_evaluations: bool = False
 
 
 class StudyConfig(_Strict):

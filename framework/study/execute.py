@@ -78,6 +78,17 @@ def build_problem(
     )
 
 
+def _evaluation_bar(spec: dict, config: dict):
+    """A progress bar over evaluations, for long runs executed in the foreground process."""
+    execution = config.get("execution", {})
+    if not execution.get("progress_evaluations") or execution.get("backend", "serial") != "serial":
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=spec["budget"]["max_evaluations"], desc=f"{spec['label']} seed {spec['seed']}",
+                unit="eval", leave=False, position=1)
+
+
 def _history_rows(base: dict, history: np.ndarray) -> list[dict]:
     if history.size == 0:
         return []
@@ -96,9 +107,52 @@ def _mode_rows(base: dict, case: str, problem: UpdatingProblem, theta: np.ndarra
     return [{**base, "case": case, **row} for row in table.to_dict("records")]
 
 
+def evaluation_runner(execution: dict):
+    """The runner for a run's model evaluations, from ``execution.evaluation_backend``.
+
+    "processes": a local pool of ``workers`` processes; "dask": the cluster this run executes
+    on (inside a Dask worker) or the one at ``scheduler``. Returns (runner, close).
+    """
+    backend = execution.get("evaluation_backend", "serial")
+    if backend == "serial":
+        return None, lambda: None
+    if backend == "processes":
+        from framework.parallel import ProcessRunner
+
+        runner = ProcessRunner(execution.get("workers", 2))
+        return runner, runner.close
+    from distributed import Client, get_worker
+
+    from framework.parallel import DaskRunner
+
+    try:
+        get_worker()
+        return DaskRunner(None), lambda: None  # inside a Dask worker: use its cluster
+    except ValueError:
+        pass
+    if not execution.get("scheduler"):
+        raise ValueError("execution.evaluation_backend=dask needs execution.scheduler outside a Dask worker")
+    client = Client(execution["scheduler"])
+    return DaskRunner(client), client.close
+
+
 def execute_run(spec: dict, runner=None) -> dict[str, list[dict]]:
     """Run one spec and return its rows for every table."""
     config = spec["config"]
+    close = lambda: None  # noqa: E731
+    if runner is None:
+        try:
+            runner, close = evaluation_runner(config.get("execution", {}))
+        except Exception as exc:
+            runner = None
+            log.warning("evaluation backend unavailable (%s); evaluating serially", exc)
+    try:
+        return _execute(spec, config, runner)
+    finally:
+        close()
+
+
+def _execute(spec: dict, config: dict, runner) -> dict[str, list[dict]]:
     base = {
         "run_id": spec["run_id"],
         "study": spec["study"],
@@ -111,9 +165,16 @@ def execute_run(spec: dict, runner=None) -> dict[str, list[dict]]:
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
     try:
         problem = build_problem(config, runner=runner)
-        result = run_optimizer(
-            spec["algorithm"], problem, spec["seed"], Budget(**spec["budget"]), **spec["settings"]
-        )
+        bar = _evaluation_bar(spec, config)
+        if bar is not None:
+            problem.log.on_record = bar.update
+        try:
+            result = run_optimizer(
+                spec["algorithm"], problem, spec["seed"], Budget(**spec["budget"]), **spec["settings"]
+            )
+        finally:
+            if bar is not None:
+                bar.close()
     except Exception as exc:  # a failed run is data, not the end of the study
         log.warning("run %s failed: %s", spec["run_id"], exc)
         tables["runs"].append(

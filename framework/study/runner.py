@@ -36,6 +36,8 @@ def run_study(
     out = cfg.output_dir(root)
     store = ResultStore(out)
     specs = plan(cfg)
+    preflight(specs)
+    store.clean_temp()
     wanted = {s["run_id"] for s in specs}
     if not resume and store.parts.exists():
         for path in store.parts.glob("*.json"):
@@ -85,6 +87,29 @@ def run_study(
 
         report(out)
     return tables
+
+
+def preflight(specs: list[dict]) -> None:
+    """Build every distinct problem of the plan (model, data, parameters, objective) before
+    any run starts, so bad input fails early with an InputError naming the field and value."""
+    from framework.errors import InputError
+    from framework.study.execute import build_problem
+
+    seen = set()
+    for spec in specs:
+        config = spec["config"]
+        key = repr({k: config[k] for k in ("structure", "measured", "validation", "parameters", "objective")})
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            build_problem(config)
+            for case in config.get("validation", []):
+                build_problem(config, structure_options=case["structure_options"], measured_cfg=case["measured"])
+        except InputError as exc:
+            raise InputError(f"study {spec['study']!r}: {exc}") from None
+        except (KeyError, ValueError, TypeError) as exc:
+            raise InputError(f"study {spec['study']!r}: {type(exc).__name__}: {exc}") from None
 
 
 def _progress(total: int, name: str, show: bool):

@@ -28,6 +28,16 @@ class ResultStore:
         self.root = Path(root)
         self.parts = self.root / "_runs"
 
+    def clean_temp(self) -> int:
+        """Remove temporary files left by a process killed in the middle of a write."""
+        n = 0
+        for folder in (self.root, self.parts):
+            if folder.exists():
+                for tmp in folder.glob(".*.tmp"):
+                    tmp.unlink(missing_ok=True)
+                    n += 1
+        return n
+
     def stored_ids(self) -> set[str]:
         if not self.parts.exists():
             return set()
