@@ -6,15 +6,15 @@ import argparse
 import logging
 import os
 import sys
+from pathlib import Path
 
 # Small dense eigenproblems and process-level parallelism: one BLAS thread per process is
 # much faster than a multi-threaded BLAS fighting for the same cores (measured up to 40x on
 # a loaded 2-core machine). Set before numpy is imported; an explicit user setting wins.
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
-from pathlib import Path
 
-from framework.errors import InputError
+from framework.errors import InputError  # noqa: E402
 
 
 def _cmd_run(args) -> int:

@@ -279,10 +279,13 @@ def build(
     column_elements: int = 6,
     nonstructural_nodes_m: Sequence[tuple[float, float]] = NONSTRUCTURAL_NODES_M,
     column_inset_m: float = DEFAULT_COLUMN_INSET_M,
+    column_stiffness_ratio: float = 1.0,
 ) -> dict:
     """Create the frame in the OpenSees domain; returns node tags of interest.
 
-    values: the six bracket stiffnesses (k_u1..k_r3).
+    values: the six bracket stiffnesses (k_u1..k_r3). column_stiffness_ratio multiplies
+    the columns' E and G (an option for model variants, e.g. the discrepancy workflow's
+    rigid-joint frame; default 1 = the SPEC values).
     """
     ops = ops_module()
     missing = [k for k in BRACKET_STIFFNESS if k not in values]
@@ -295,6 +298,8 @@ def build(
         raise InputError(f"lab_frame_detailed: mesh must be an even number >= 2, got {mesh!r}")
     if column_elements < 1:
         raise InputError(f"lab_frame_detailed: column_elements must be >= 1, got {column_elements!r}")
+    if not column_stiffness_ratio > 0:
+        raise InputError(f"lab_frame_detailed: column_stiffness_ratio must be > 0, got {column_stiffness_ratio!r}")
 
     ops.model("basic", "-ndm", 3, "-ndf", 6)
 
@@ -342,7 +347,8 @@ def build(
             ops.node(tag, x, y, HEIGHT_M * k / column_elements)
         for a, b in zip(nodes[:-1], nodes[1:]):
             ele += 1
-            section = (COLUMN_AREA_M2, ALU_E_PA, ALU_G_PA, COLUMN_J_M4, COLUMN_I_M4, COLUMN_I_M4)
+            e_pa, g_pa = ALU_E_PA * column_stiffness_ratio, ALU_G_PA * column_stiffness_ratio
+            section = (COLUMN_AREA_M2, e_pa, g_pa, COLUMN_J_M4, COLUMN_I_M4, COLUMN_I_M4)
             ops.element("elasticBeamColumn", ele, a, b, *section, 1, "-mass", rho_a)
         top = _node_at(xc, yc, mesh)
         if column_inset_m > 0:  # bracket on a slab point rigidly linked to the slab corner node
