@@ -142,3 +142,46 @@ def test_resume_after_kill_gives_the_same_tables(tmp_path):
     assert done.returncode == 0, done.stderr
     _assert_same(_tables(tmp_path / "ref"), _tables(out))
     assert len(pd.read_csv(out / "runs.csv")) == 8
+
+
+def test_report_regenerates_figures_from_tables_alone(tmp_path, capsys):
+    from framework.cli import main
+
+    out = tmp_path / "rep"
+    cfg = validate(dict(SMALL, output=str(out)))
+    run_study(cfg, figures=False)
+    assert not list(out.glob("*.png"))
+    assert main(["report", str(out)]) == 0
+    for name in ("convergence.png", "parameters.png", "frequencies.png", "validation.png"):
+        assert (out / name).stat().st_size > 10_000, name
+
+
+def test_selection_summary_marks_converged_settings(tmp_path):
+    from framework.study.selection import summarize
+
+    out = tmp_path / "sel"
+    data = dict(SMALL, output=str(out), validation=[], options={"selection": {"tolerance": 1e-5}},
+                algorithms={"sm": {"algorithm": "sm", "settings": {"start": "random"}},
+                            "pso_tiny": {"algorithm": "pso", "settings": {"swarm_size": 2},
+                                         "budget": {"max_evaluations": 20}}})
+    run_study(validate(data), figures=False)
+    summary = summarize(out, tolerance=1e-5).set_index("label")
+    assert bool(summary.loc["sm", "converged"]) and not bool(summary.loc["pso_tiny", "converged"])
+    assert summary.loc["pso_tiny", "result"] == "not converged"
+    assert (out / "selection.png").exists()
+
+
+def test_external_dask_scheduler_address(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    try:
+        cfg = validate(dict(SMALL, output=str(tmp_path / "d"),
+                            execution={"backend": "dask", "scheduler": cluster.scheduler_address,
+                                       "progress": False}))
+        tables = run_study(cfg, figures=False)
+    finally:
+        cluster.close()
+    ref = validate(dict(SMALL, output=str(tmp_path / "s")))
+    run_study(ref, figures=False)
+    _assert_same(_tables(tmp_path / "s"), _tables(tmp_path / "d"))
+    assert len(tables["runs"]) == 5
