@@ -13,8 +13,10 @@ non-negative Pi we derate the fitness F = 1 / (1 + Pi) and minimise the equivale
 
 which equals Pi away from all minima and rises steeply inside a niche (to (1+Pi)/m - 1 at
 its centre). Each minimum is reported with its raw Pi and its derated value at the time
-it was found; a minimum whose raw and derated values differ lies inside an earlier niche,
-i.e. it is an artefact of the niche radius.
+it was found. Two kinds of minima are artefacts of the niche radius and flagged so: one
+whose raw and derated values differ lies inside an earlier niche (``inside_niche``), and one
+that sits on the edge of an earlier niche, |d - r| <= 1 % of r (``on_niche_boundary``),
+where the derating is back to 1 but the search was only stopped by the niche wall.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ class SNTSettings(Settings):
     n_minima: int = Field(4, ge=1)
     niche_radius: float | None = Field(None, gt=0)
     derating_m: float = Field(0.1, gt=0, lt=1)
+    boundary_tolerance: float = Field(0.01, ge=0)
     pso: dict = Field(default_factory=dict)
 
 
@@ -107,6 +110,9 @@ def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
             raw = problem.objective1(x)
             derated = (1.0 + raw) / float(derating(x[None, :], minima, r, s.derating_m)[0]) - 1.0
             distances = [float(np.linalg.norm(x - m_)) for m_ in minima]
+            # a search pushed out of a niche often stops right on its edge (d = r), where the
+            # derating is 1 again: raw == derated, yet the point is an artefact of the radius
+            on_boundary = bool(any(abs(d - r) <= s.boundary_tolerance * r for d in distances))
             records.append(
                 {
                     "minimum": n + 1,
@@ -114,7 +120,9 @@ def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
                     "theta": problem.parameters.to_physical(x).tolist(),
                     "raw_objective": raw,
                     "derated_objective": derated,
-                    "artefact": bool(not np.isclose(raw, derated, rtol=1e-9, atol=1e-15)),
+                    "inside_niche": bool(not np.isclose(raw, derated, rtol=1e-9, atol=1e-15)),
+                "on_niche_boundary": on_boundary,
+                "artefact": bool(not np.isclose(raw, derated, rtol=1e-9, atol=1e-15)) or on_boundary,
                     "distance_to_previous": distances,
                     "n_evaluations": problem.log.n_evaluations - used,
                 }

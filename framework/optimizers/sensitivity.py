@@ -12,7 +12,8 @@ the Jacobian (counted by the problem), and the condition number of the sensitivi
 J = dr/dx at the solution (normalized coordinates).
 
 Starts: "initial" (the initial model), "random" (uniform in the box from the run's
-generator) or ``start_factor`` times the initial values (e.g. 0.92, 1.11).
+generator), ``start_factor`` times the initial values (e.g. 0.92, 1.11), or an explicit
+normalized point ``x0`` (e.g. to polish the result of a global search).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from framework.optimizers.base import Budget, BudgetExhausted, OptimizerResult, 
 class SMSettings(Settings):
     start: Literal["initial", "random"] = "initial"
     start_factor: float | None = Field(None, gt=0)
+    x0: list[float] | None = None  # explicit start in normalized coordinates (e.g. to polish a GA/PSO result)
     diff_step: float = Field(1e-3, gt=0)
     ftol: float = Field(1e-10, gt=0)
     xtol: float = Field(1e-10, gt=0)
@@ -35,6 +37,11 @@ class SMSettings(Settings):
 
 
 def start_point(problem, seed: int, s: SMSettings) -> np.ndarray:
+    if s.x0 is not None:
+        x0 = np.asarray(s.x0, dtype=float)
+        if x0.shape != (problem.n_params,) or not np.all(np.isfinite(x0)):
+            raise ValueError(f"sm: x0 must be {problem.n_params} finite numbers in [0, 1], got {s.x0!r}")
+        return np.clip(x0, 0.0, 1.0)
     if s.start_factor is not None:
         theta0 = problem.parameters.initial * s.start_factor
         return np.clip(problem.parameters.to_normalized(theta0), 0.0, 1.0)
