@@ -194,7 +194,7 @@ def test_a_dead_evaluation_worker_is_replaced(tmp_path, monkeypatch):
 
 
 # ---- interruption -------------------------------------------------------------------------
-KILL_STUDY = dict(BASE, runs=12, budget={"max_evaluations": 2000, "stall_iterations": 30},
+KILL_STUDY = dict(BASE, runs=12, budget={"max_evaluations": 800, "stall_iterations": 30},
                   algorithms={"sm": {"algorithm": "sm", "settings": {"start": "random"}},
                               "ga": {"algorithm": "ga"}})
 

@@ -121,7 +121,7 @@ def test_process_backend_gives_the_same_tables(tmp_path):
 
 def test_resume_after_kill_gives_the_same_tables(tmp_path):
     """Kill -9 a running study, resume it, compare with an uninterrupted run."""
-    data = dict(SMALL, runs=4, budget={"max_evaluations": 3000, "stall_iterations": 50},
+    data = dict(SMALL, runs=4, budget={"max_evaluations": 1200, "stall_iterations": 50},
                 algorithms={"ga": {"algorithm": "ga"}, "sm": {"algorithm": "sm", "settings": {"start": "random"}}})
     ref = validate(dict(data, output=str(tmp_path / "ref")))
     run_study(ref, figures=False)
