@@ -65,12 +65,18 @@ def convergence(history: pd.DataFrame, path: Path) -> None:
 
 
 def parameter_spread(parameters: pd.DataFrame, path: Path) -> None:
+    """Updated value per parameter and label: as a ratio to the initial value, or, where an
+    initial value is 0 (ratio undefined, e.g. stiffness changes alpha), normalized to the bounds."""
     df = parameters.assign(group=_group_label(parameters))
+    use_ratio = df["ratio"].notna().all()
+    y, ylabel, ref = ("ratio", "updated / initial value", 1.0) if use_ratio else (
+        "normalized", "updated value, normalized to bounds [0, 1]", None)
     n = df["parameter"].nunique()
     fig, ax = plt.subplots(figsize=(max(6, 1.2 * n + 2), 4.5))
-    sns.stripplot(data=df, x="parameter", y="ratio", hue="group", dodge=True, ax=ax, size=4, alpha=0.8)
-    ax.axhline(1.0, color="grey", lw=0.8, ls="--")
-    ax.set(ylabel="updated / initial value", title="Updated parameters, one point per run")
+    sns.stripplot(data=df, x="parameter", y=y, hue="group", dodge=True, ax=ax, size=4, alpha=0.8)
+    if ref is not None:
+        ax.axhline(ref, color="grey", lw=0.8, ls="--")
+    ax.set(ylabel=ylabel, title="Updated parameters, one point per run")
     ax.legend(fontsize=7)
     _save(fig, path)
 

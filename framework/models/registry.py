@@ -17,6 +17,8 @@ STRUCTURES: dict[str, str] = {
     "lab_frame_detailed": "framework.models.lab_frame_detailed:make_model",
     "bridge": "framework.models.bridge:make_model",
     "beam": "framework.models.beam:make_model",
+    "four_story": "framework.models.smu:make_four_story",
+    "footbridge": "framework.models.smu:make_footbridge",
 }
 
 MEASUREMENTS: dict[str, str] = {
@@ -24,6 +26,8 @@ MEASUREMENTS: dict[str, str] = {
     "bridge": "framework.models.bridge:measured",
     "beam": "framework.models.beam:measured",
     "identified": "framework.identification.datasets:measured",
+    "four_story": "framework.models.smu:four_story_measured",
+    "footbridge": "framework.models.smu:footbridge_measured",
 }
 
 

@@ -160,6 +160,7 @@ def _execute(spec: dict, config: dict, runner) -> dict[str, list[dict]]:
         "algorithm": spec["algorithm"],
         "variant": spec["variant"],
         "seed": spec["seed"],
+        "structure": config["structure"]["name"],
     }
     structure = config["structure"]["name"]
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
