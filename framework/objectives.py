@@ -215,6 +215,7 @@ FORMULATIONS: dict[str, Formulation] = {
 #: Formulations defined in other modules, imported on first use: name -> "module:attribute".
 LAZY_FORMULATIONS: dict[str, str] = {
     "reference": "framework.reference_formulation:FORMULATION",
+    "gaussian": "framework.discrepancy.likelihood:FORMULATION",
 }
 
 

@@ -194,7 +194,8 @@ def set_path(data: dict, dotted: str, value: Any) -> None:
     node[keys[-1]] = value
 
 
-def _format_error(exc: ValidationError, source: str) -> str:
+def format_error(exc: ValidationError, source: str) -> str:
+    """One line per pydantic error: '<source>: <field path>: <message> (value: ...)'."""
     lines = []
     for err in exc.errors():
         loc = ".".join(str(p) for p in err["loc"])
@@ -214,7 +215,7 @@ def validate(data: dict, source: str = "<config>", base_dir: Path | None = None)
     try:
         cfg = StudyConfig.model_validate(data)
     except ValidationError as exc:
-        raise InputError(_format_error(exc, source)) from None
+        raise InputError(format_error(exc, source)) from None
     for name, (lo, hi) in cfg.parameters.bounds.items():
         if not (math.isfinite(lo) and math.isfinite(hi)):
             raise InputError(f"{source}: parameters.bounds.{name}: bounds must be finite, got [{lo}, {hi}]")
@@ -260,3 +261,6 @@ def load(path: str | Path, overrides: list[str] | None = None) -> StudyConfig:
         key, value = item.split("=", 1)
         set_path(data, key.strip(), parse_value(value))
     return validate(data, source=str(path), base_dir=path.parent)
+
+
+_format_error = format_error  # backwards-compatible private name

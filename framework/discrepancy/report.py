@@ -1,0 +1,93 @@
+"""Write a diagnosis: tidy tables (CSV + Parquet, atomic) and the before/after figure.
+
+Files under the output folder: ``modes`` (per measured mode, before and after:
+frequency, error, MAC, matched, z), ``candidates`` (ranking with BIC per round),
+``parameters`` (fitted base and effect parameters), ``detection`` (chi-square test per
+round), ``comac`` (per sensor and round), ``summary`` (one row), and ``discrepancy.png``
+drawn from the tables only.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from framework.io import atomic_write_bytes  # noqa: E402
+from framework.study.store import write_table  # noqa: E402
+
+log = logging.getLogger(__name__)
+
+
+def write(diagnosis, output: str | Path, figure: bool = True) -> dict[str, pd.DataFrame]:
+    """Write every table of ``diagnosis`` (and the figure) under ``output``."""
+    out = Path(output)
+    tables = diagnosis.tables()
+    for name, df in tables.items():
+        write_table(df, out / name)
+    if figure:
+        plot(tables, out / "discrepancy.png")
+    return tables
+
+
+def plot(tables: dict[str, pd.DataFrame], path: Path) -> None:
+    """Four panels: frequency error and MAC per mode before/after, candidate Delta BIC, COMAC."""
+    modes = tables["modes"]
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    colors = {"before": "tab:red", "after": "tab:blue"}
+    width = 0.38
+    for k, stage in enumerate(("before", "after")):
+        d = modes[modes["stage"] == stage]
+        x = d["mode"].to_numpy() + (k - 0.5) * width
+        err = d["error_pct"].to_numpy(dtype=float)
+        matched = d["matched"].to_numpy(dtype=bool)
+        model = d["model"].iloc[0] if len(d) else stage
+        axes[0, 0].bar(x, np.where(matched, err, 0.0), width, color=colors[stage], label=f"{stage}: {model}")
+        axes[0, 1].bar(x, np.where(matched, d["mac"].to_numpy(dtype=float), 0.0), width, color=colors[stage])
+        for xi, ok in zip(x, matched):
+            if not ok:
+                for ax in (axes[0, 0], axes[0, 1]):
+                    ax.text(xi, 0, "unmatched", rotation=90, ha="center", va="bottom", fontsize=7, color=colors[stage])
+    ticks = sorted(modes["mode"].unique())
+    for ax in (axes[0, 0], axes[0, 1]):
+        ax.set_xticks(ticks)
+    axes[0, 0].axhline(0, color="k", lw=0.5)
+    axes[0, 0].set(xlabel="measured mode", ylabel="frequency error (%)", title="calibrated model vs measured")
+    axes[0, 0].legend(fontsize=7)
+    axes[0, 1].set(xlabel="measured mode", ylabel="MAC", ylim=(0, 1.05), title="MAC of paired modes")
+    cands = tables.get("candidates", pd.DataFrame())
+    ax = axes[1, 0]
+    if len(cands):
+        c = cands.copy()
+        c["name"] = (
+            "round " + c["round"].astype(str) + ": " + c["effect"] + c["variant"].map(lambda v: f" [{v}]" if v else "")
+        )
+        gain = np.sign(c["delta_bic_vs_none"]) * np.log10(1 + np.abs(c["delta_bic_vs_none"]))
+        ax.barh(c["name"], gain, color=np.where(c["named"], "tab:green", "0.6"))
+        ax.axvline(np.log10(11), color="k", ls="--", lw=0.8)
+        ax.set(xlabel="sign * log10(1 + |Delta BIC vs no change|)", title="candidates (green: named; dashed: decisive)")
+        ax.tick_params(axis="y", labelsize=7)
+    else:
+        ax.text(0.5, 0.5, "no candidates ranked", ha="center")
+    com = tables.get("comac", pd.DataFrame())
+    ax = axes[1, 1]
+    if len(com):
+        for r, d in com.groupby("round"):
+            ax.plot(range(len(d)), d["comac"], "o-", label=f"round {r}: {d['model'].iloc[0]}")
+        ax.set_xticks(range(len(d)), d["sensor"], rotation=90, fontsize=6)
+        ax.set(ylabel="COMAC", title="COMAC by sensor", ylim=(min(0.9, float(com["comac"].min()) - 0.02), 1.005))
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    atomic_write_bytes(path, buf.getvalue())
