@@ -15,7 +15,6 @@ Example ::
 
 from __future__ import annotations
 
-import copy
 import sys
 from pathlib import Path
 from typing import Literal
@@ -26,7 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from framework.discrepancy.generate import NOISE_LEVELS, HiddenCase, Noise, generate
 from framework.discrepancy.workflow import DiagnoseSettings, diagnose
 from framework.errors import InputError
-from framework.study.config import format_error, parse_value, set_path
+from framework.study.config import format_error, read_with_overrides
 
 DEFAULT_ROOT = Path("results/discrepancy")
 
@@ -77,20 +76,7 @@ class DiagnoseConfig(_Strict):
 def load(path: str | Path, overrides: list[str] | None = None) -> DiagnoseConfig:
     """Read and validate a diagnose config; ``overrides`` are ``key.path=value`` strings."""
     path = Path(path)
-    if not path.exists():
-        raise InputError(f"config file not found: {path}")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise InputError(f"{path}: not valid YAML: {exc}") from None
-    if not isinstance(data, dict):
-        raise InputError(f"{path}: a diagnose config must be a mapping, got {type(data).__name__}")
-    data = copy.deepcopy(data)
-    for item in overrides or []:
-        if "=" not in item:
-            raise InputError(f"--set {item!r}: expected KEY.PATH=VALUE")
-        key, value = item.split("=", 1)
-        set_path(data, key.strip(), parse_value(value))
+    data = read_with_overrides(path, overrides, what="diagnose config")
     try:
         cfg = DiagnoseConfig.model_validate(data)
     except ValidationError as exc:

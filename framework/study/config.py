@@ -243,23 +243,32 @@ def validate(data: dict, source: str = "<config>", base_dir: Path | None = None)
     return cfg
 
 
-def load(path: str | Path, overrides: list[str] | None = None) -> StudyConfig:
-    """Read a YAML config, apply ``key.path=value`` overrides, validate."""
+def read_with_overrides(path: str | Path, overrides: list[str] | None = None, what: str = "config") -> dict:
+    """Read a YAML mapping and apply ``key.path=value`` overrides (errors name the file)."""
     path = Path(path)
     if not path.exists():
-        raise InputError(f"config file not found: {path}")
+        raise InputError(f"{what} file not found: {path}")
     try:
         data = yaml.safe_load(path.read_text())
     except yaml.YAMLError as exc:
         raise InputError(f"{path}: not valid YAML: {exc}") from None
     if data is None:
-        raise InputError(f"{path}: config file is empty")
+        raise InputError(f"{path}: {what} file is empty")
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: a {what} must be a mapping, got {type(data).__name__}")
     data = copy.deepcopy(data)
     for item in overrides or []:
         if "=" not in item:
             raise InputError(f"--set {item!r}: expected KEY.PATH=VALUE")
         key, value = item.split("=", 1)
         set_path(data, key.strip(), parse_value(value))
+    return data
+
+
+def load(path: str | Path, overrides: list[str] | None = None) -> StudyConfig:
+    """Read a YAML config, apply ``key.path=value`` overrides, validate."""
+    path = Path(path)
+    data = read_with_overrides(path, overrides)
     return validate(data, source=str(path), base_dir=path.parent)
 
 

@@ -152,16 +152,29 @@ def execute_run(spec: dict, runner=None) -> dict[str, list[dict]]:
         close()
 
 
-def _execute(spec: dict, config: dict, runner) -> dict[str, list[dict]]:
-    base = {
+def run_key(spec: dict) -> dict:
+    """The columns that identify a run in every table."""
+    return {
         "run_id": spec["run_id"],
         "study": spec["study"],
         "label": spec["label"],
         "algorithm": spec["algorithm"],
         "variant": spec["variant"],
         "seed": spec["seed"],
-        "structure": config["structure"]["name"],
+        "structure": spec["config"]["structure"]["name"],
     }
+
+
+def error_tables(spec: dict, exc: BaseException) -> dict[str, list[dict]]:
+    """The rows of a run that failed as a whole: one runs row with status 'error'."""
+    tables: dict[str, list[dict]] = {t: [] for t in TABLES}
+    tables["runs"].append({**run_key(spec), "objective": np.nan, "n_evaluations": 0, "n_iterations": 0,
+                           "wall_s": 0.0, "status": "error", "error": f"{type(exc).__name__}: {exc}"})
+    return tables
+
+
+def _execute(spec: dict, config: dict, runner) -> dict[str, list[dict]]:
+    base = run_key(spec)
     structure = config["structure"]["name"]
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
     try:
@@ -178,20 +191,9 @@ def _execute(spec: dict, config: dict, runner) -> dict[str, list[dict]]:
                 bar.close()
     except Exception as exc:  # a failed run is data, not the end of the study
         log.warning("run %s failed: %s", spec["run_id"], exc)
-        tables["runs"].append(
-            {
-                **base,
-                "structure": structure,
-                "objective": np.nan,
-                "n_evaluations": 0,
-                "n_iterations": 0,
-                "wall_s": 0.0,
-                "status": "error",
-                "error": f"{type(exc).__name__}: {exc}",
-                "traceback": traceback.format_exc(limit=5),
-            }
-        )
-        return tables
+        failed = error_tables(spec, exc)
+        failed["runs"][0]["traceback"] = traceback.format_exc(limit=5)
+        return failed
     tables["runs"].append(
         {
             **base,

@@ -10,7 +10,7 @@ import yaml
 
 from framework.parallel import map_unordered
 from framework.study.config import StudyConfig
-from framework.study.execute import execute_run
+from framework.study.execute import error_tables, execute_run
 from framework.study.plan import plan
 from framework.study.store import ResultStore
 
@@ -63,20 +63,7 @@ def run_study(
         ):
             spec = todo[i]
             if isinstance(result, Exception):
-                result = {
-                    "runs": [
-                        {
-                            "run_id": spec["run_id"],
-                            "study": spec["study"],
-                            "label": spec["label"],
-                            "algorithm": spec["algorithm"],
-                            "variant": spec["variant"],
-                            "seed": spec["seed"],
-                            "status": "error",
-                            "error": f"{type(result).__name__}: {result}",
-                        }
-                    ]
-                }
+                result = error_tables(spec, result)
             store.write_run(spec["run_id"], result)
             bar.update(1)
     finally:
