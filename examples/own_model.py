@@ -1,6 +1,5 @@
 """Bring your own OpenSeesPy model: a two-storey shear frame updated to 'measured' modes."""
 
-import numpy as np
 import openseespy.opensees as ops
 
 from framework.measurements import MeasuredModes
