@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 from pathlib import Path
 
 import pandas as pd
@@ -69,13 +70,21 @@ class ResultStore:
         atomic_write_text(self.root / "config.yaml", text)
 
 
+def natural_key(text: str) -> str:
+    """Sort key that orders numbers inside text by value ('swarm_size=5' < 'swarm_size=40')."""
+    return re.sub(r"-?\d+(?:\.\d+)?(?:e-?\d+)?", lambda m: f"{float(m.group()) + 1e12:030.9f}", str(text))
+
+
 def _sorted(df: pd.DataFrame) -> pd.DataFrame:
     if df.empty:
         return df
     keys = [k for k in SORT_KEYS if k in df.columns]
     extra = [k for k in ("case", "mode", "parameter", "evaluation", "key") if k in df.columns]
     order = keys + extra
-    return df.sort_values(order, kind="stable").reset_index(drop=True) if order else df
+    if not order:
+        return df
+    key = lambda col: col.map(natural_key) if col.name in ("label", "variant") else col  # noqa: E731
+    return df.sort_values(order, kind="stable", key=key).reset_index(drop=True)
 
 
 def write_table(df: pd.DataFrame, stem: Path) -> None:
