@@ -1,0 +1,1 @@
+"""Structural models: the StructuralModel protocol, the OpenSees path and the built-in structures."""
