@@ -18,7 +18,6 @@
 
 from __future__ import annotations
 
-import io
 import json
 import logging
 import re
@@ -33,7 +32,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
-from framework.io import atomic_write_bytes, atomic_write_text  # noqa: E402
+from framework.io import atomic_write_text, save_figure  # noqa: E402
 from framework.study.store import read_table  # noqa: E402
 
 log = logging.getLogger(__name__)
@@ -181,10 +180,7 @@ def alpha_table(runs: pd.DataFrame, parameters: pd.DataFrame) -> pd.DataFrame:
 
 # ---- figures -------------------------------------------------------------------------------
 def _save(fig, path: Path) -> None:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=130, bbox_inches="tight")
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
+    save_figure(fig, path, dpi=130)
 
 
 def plot_objectives(runs: pd.DataFrame, path: Path) -> None:

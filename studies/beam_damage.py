@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 
 from framework import damage
-from framework.io import atomic_write_text
+from framework.io import atomic_write_text, save_figure
 from framework.models import beam
 from framework.objectives import ObjectiveSpec
 from framework.optimizers import Budget, run_optimizer
@@ -273,8 +273,7 @@ def make_figures(out: Path, noise_pct: float = 3.0) -> list[Path]:
             ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
         fig.tight_layout()
         path = out / f"{fname}_noise{noise_pct:g}.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
+        save_figure(fig, path, dpi=120, tight=False)
         paths.append(path)
     pareto = pd.read_csv(out / "pareto.csv")
     pareto = pareto[(pareto.noise_pct == noise_pct) & (pareto.mesh == "truth")]
@@ -291,8 +290,7 @@ def make_figures(out: Path, noise_pct: float = 3.0) -> list[Path]:
         ax.legend()
         fig.tight_layout()
         path = out / f"pareto_noise{noise_pct:g}.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
+        save_figure(fig, path, dpi=120, tight=False)
         paths.append(path)
     lc = pd.read_csv(out / "lcurve.csv")
     lc = lc[(lc.noise_pct == noise_pct) & (lc.mesh == "truth")]
@@ -311,8 +309,7 @@ def make_figures(out: Path, noise_pct: float = 3.0) -> list[Path]:
             ax.legend()
         fig.tight_layout()
         path = out / f"lcurve_noise{noise_pct:g}.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
+        save_figure(fig, path, dpi=120, tight=False)
         paths.append(path)
     return paths
 

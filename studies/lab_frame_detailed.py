@@ -21,7 +21,6 @@ can be run by ``gomu run`` once it does (the ``options`` block is this script's 
 from __future__ import annotations
 
 import argparse
-import io
 import logging
 import sys
 import time
@@ -30,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from framework.io import atomic_write_bytes, atomic_write_text
+from framework.io import atomic_write_text, save_figure
 from framework.models.registry import builtin_measured, make_structure
 from framework.objectives import ObjectiveSpec
 from framework.optimizers import Budget, run_optimizer
@@ -310,9 +309,7 @@ def comparison_table(runs: pd.DataFrame, modes: pd.DataFrame) -> pd.DataFrame:
 
 # ------------------------------------------------------------------------ figures
 def _save(fig, path: Path) -> None:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=130, bbox_inches="tight")
-    atomic_write_bytes(path, buf.getvalue())
+    save_figure(fig, path, dpi=130)
 
 
 def figures(out: Path, tables: dict) -> None:
@@ -335,7 +332,6 @@ def figures(out: Path, tables: dict) -> None:
         row[1].set_title(f"MAC sensitivity ({point} model)")
     fig.tight_layout()
     _save(fig, out / "sensitivity.png")
-    plt.close(fig)
 
     hist = tables["history"]
     fig, ax = plt.subplots(figsize=(6.5, 4))
@@ -355,7 +351,6 @@ def figures(out: Path, tables: dict) -> None:
     ax.set_ylabel("best objective Pi")
     ax.legend(fontsize=8)
     _save(fig, out / "convergence.png")
-    plt.close(fig)
 
     pars = tables["parameters"]
     pars = pars[pars["algorithm"] != "initial"]
@@ -364,7 +359,6 @@ def figures(out: Path, tables: dict) -> None:
     ax.set_ylabel("updated / initial")
     ax.set_title("updated parameters over runs")
     _save(fig, out / "parameters.png")
-    plt.close(fig)
 
     comp = tables["comparison"].copy()
     comp["model"] = comp["structure"] + " " + comp["algorithm"]

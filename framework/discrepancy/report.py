@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from framework.io import atomic_write_bytes  # noqa: E402
+from framework.io import save_figure  # noqa: E402
 from framework.study.store import write_table  # noqa: E402
 
 log = logging.getLogger(__name__)
@@ -85,9 +85,4 @@ def plot(tables: dict[str, pd.DataFrame], path: Path) -> None:
         ax.legend(fontsize=7)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    import io
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
+    save_figure(fig, path, dpi=110, tight=False)

@@ -29,7 +29,7 @@ from framework.discrepancy.effects import get_catalogue
 from framework.discrepancy.generate import NOISE_LEVELS, HiddenCase, generate
 from framework.discrepancy.score import NO_CHANGE
 from framework.discrepancy.workflow import DiagnoseSettings, diagnose
-from framework.io import atomic_write_bytes, atomic_write_text
+from framework.io import atomic_write_text, save_figure
 from framework.study.store import write_table
 
 log = logging.getLogger(__name__)
@@ -227,7 +227,6 @@ def _json(obj):
 
 def plot(cases: pd.DataFrame, path: Path) -> None:
     """Gap before/after per case (max frequency error, log scale) and naming outcome."""
-    import io
 
     import matplotlib
 
@@ -275,7 +274,4 @@ def plot(cases: pd.DataFrame, path: Path) -> None:
         ax.set(xscale="log", yscale="log", xlabel="max |freq error| before (%)", ylabel="after (%)", title=s)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
+    save_figure(fig, path, dpi=110, tight=False)

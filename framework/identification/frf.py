@@ -228,7 +228,7 @@ def plot_frf(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from framework.io import atomic_write_bytes
+    from framework.io import save_figure
 
     f = frf.frequency_hz
     sel = f <= (f_max_hz if f_max_hz else f[-1])
@@ -251,10 +251,4 @@ def plot_frf(
         axes[0].legend(fontsize=7, ncol=2)
     axes[0].set_title(title or f"H1 FRF ({frf.n_averages} averages)")
     fig.tight_layout()
-    import io
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=120)
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
-    return Path(path)
+    return save_figure(fig, path, dpi=120, tight=False)

@@ -143,14 +143,13 @@ def plot_stability(
 ) -> Path:
     """Stability diagram: poles (order vs frequency), stable ones filled; optional mode
     indicator (frequency, values) such as the summed |FRF| on a log axis behind."""
-    import io
 
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from framework.io import atomic_write_bytes
+    from framework.io import save_figure
 
     fmax = f_max_hz or float(stability["frequency_hz"].max())
     tab = stability[stability["frequency_hz"] <= fmax]
@@ -174,8 +173,4 @@ def plot_stability(
     ax.legend(loc="upper left", fontsize=8)
     ax.set_title(title or "stability diagram")
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=120)
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
-    return Path(path)
+    return save_figure(fig, path, dpi=120, tight=False)

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from framework.io import atomic_write_text
+from framework.io import atomic_write_text, save_figure
 from framework.models import bridge
 from framework.objectives import ObjectiveSpec, RatioConstraint
 from framework.optimizers import Budget, run_optimizer
@@ -113,8 +113,7 @@ def initial_frequencies(out_dir: Path, cable_elements=(1, 2, 4, 8)) -> pd.DataFr
     ax.legend(fontsize=8)
     ax.set_title("Bridge: initial model vs measured")
     fig.tight_layout()
-    fig.savefig(out_dir / "initial_frequencies.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, out_dir / "initial_frequencies.png", dpi=120, tight=False)
     return df
 
 
@@ -172,15 +171,13 @@ def _plot_sensitivities(table, singular, corr, out_dir: Path) -> None:
         cond = singular[singular.point == point].condition_number.iloc[0]
         ax.set_title(f"{quantity} sensitivities at the {point} point (condition number {cond:.1f})", fontsize=10)
     fig.tight_layout()
-    fig.savefig(out_dir / "sensitivity.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, out_dir / "sensitivity.png", dpi=120, tight=False)
     fig, ax = plt.subplots(figsize=(5.5, 4.5))
     c = corr[corr.point == "initial"].drop(columns="point").set_index("parameter")
     sns.heatmap(c, annot=True, fmt=".2f", vmin=-1, vmax=1, cmap="RdBu_r", ax=ax)
     ax.set_title("parameter correlation (linearized fit, initial point)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(out_dir / "parameter_correlation.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, out_dir / "parameter_correlation.png", dpi=120, tight=False)
 
 
 # --- (5) 1- vs 4-element cables ---------------------------------------------------------
@@ -221,8 +218,7 @@ def cable_models(out_dir: Path, cable_elements=(1, 4), budget: int = 800) -> pd.
         ax.legend(fontsize=8)
     axes[0].set_ylabel("frequency error (%)")
     fig.tight_layout()
-    fig.savefig(out_dir / "cable_models.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, out_dir / "cable_models.png", dpi=120, tight=False)
     return df
 
 
@@ -298,8 +294,7 @@ def _plot_updated(wide: pd.DataFrame, modes: pd.DataFrame, out_dir: Path) -> Non
     ax.set_ylim(0.55, 1.35)
     ax.set_title("Bridge: updated parameter ratios (bounds 0.6-1.3)")
     fig.tight_layout()
-    fig.savefig(out_dir / "updated_ratios.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, out_dir / "updated_ratios.png", dpi=120, tight=False)
     base = modes[modes["case"] == "base"].copy()
     base["method"] = base.label.where(~base.label.str.startswith("sm"), "sm")
     fig, ax = plt.subplots(figsize=(9, 4))
@@ -309,5 +304,4 @@ def _plot_updated(wide: pd.DataFrame, modes: pd.DataFrame, out_dir: Path) -> Non
     ax.set_ylabel("frequency error after updating (%)")
     ax.set_title("Bridge: updated vs measured frequencies (every run)")
     fig.tight_layout()
-    fig.savefig(out_dir / "updated_errors.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, out_dir / "updated_errors.png", dpi=120, tight=False)

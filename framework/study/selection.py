@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from framework.io import save_figure
 from framework.study.store import read_table, write_table
 
 
@@ -68,10 +69,7 @@ def selection_figure(summary: pd.DataFrame, path: Path, title: str = "") -> None
     axes[1].set(xscale="log", xlabel="mean best - f*", title="Mean best value above f*")
     fig.suptitle(title)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=130)
-    plt.close(fig)
-    tmp.replace(path)
+    save_figure(fig, path, dpi=130, tight=False)
 
 
 def summarize(results_dir: str | Path, tolerance: float = 1e-5, reference_objective: float | None = None,
