@@ -39,6 +39,8 @@ from framework.objectives import (
     ModeCorrelation,
     ObjectiveSpec,
     register_formulation,
+    spec_n_residuals,
+    spec_split,
     use_shape_term,
 )
 
@@ -150,21 +152,13 @@ def reference_residuals(result: ModalResult, measured: MeasuredModes, spec: Obje
 
 
 def reference_n_residuals(measured: MeasuredModes, spec: ObjectiveSpec) -> int:
+    """Same layout as the SPEC residuals ([eigenvalue terms, shape terms]); checks options first."""
     _options(spec)  # called when the problem is built: bad options fail before any run
-    return measured.n_modes * (2 if use_shape_term(measured, spec) else 1)
-
-
-def reference_split(residuals: np.ndarray, measured: MeasuredModes, spec: ObjectiveSpec) -> np.ndarray:
-    """Objective vector [Pi_lambda, Pi_MAC] from the modal residuals (..., r)."""
-    m = measured.n_modes
-    r2 = np.asarray(residuals) ** 2
-    pi_lam = r2[..., :m].sum(-1)
-    pi_psi = r2[..., m : 2 * m].sum(-1) if use_shape_term(measured, spec) else np.zeros_like(pi_lam)
-    return np.stack([pi_lam, pi_psi], axis=-1)
+    return spec_n_residuals(measured, spec)
 
 
 FORMULATION = Formulation(
-    reference_residuals, reference_n_residuals, reference_split, objective_names=("Pi_lambda", "Pi_MAC")
+    reference_residuals, reference_n_residuals, spec_split, objective_names=("Pi_lambda", "Pi_MAC")
 )
 
 # ObjectiveSpec validates ``formulation`` against the registered names only, so register
