@@ -101,6 +101,23 @@ class ModeCorrelation:
     matched: np.ndarray
 
 
+def correlation_table(corr: ModeCorrelation, measured: MeasuredModes):
+    """One row per measured mode: mode, label, f_measured_hz, f_model_hz, error_pct, mac, matched."""
+    import pandas as pd
+
+    return pd.DataFrame(
+        {
+            "mode": np.arange(1, measured.n_modes + 1),
+            "label": list(measured.labels),
+            "f_measured_hz": corr.f_measured_hz,
+            "f_model_hz": corr.f_model_hz,
+            "error_pct": 100.0 * corr.frequency_error,
+            "mac": corr.mac,
+            "matched": corr.matched,
+        }
+    )
+
+
 def correlate(result: ModalResult, measured: MeasuredModes, spec: ObjectiveSpec) -> ModeCorrelation:
     """Pair measured modes with the model's and compute eps and MAC of every pair."""
     use_shapes = spec.use_shapes and measured.has_shapes

@@ -29,6 +29,7 @@ from framework.objectives import (
     ModeCorrelation,
     ObjectiveSpec,
     check_constraints,
+    correlation_table,
     get_formulation,
     n_penalty_residuals,
     penalty_residuals,
@@ -70,9 +71,7 @@ class EvaluationLog:
     def n_failed(self) -> int:
         return sum(self.failures.values())
 
-    def record(
-        self, X: np.ndarray, objective: np.ndarray, reasons: list[str | None], details: list[str]
-    ) -> None:
+    def record(self, X: np.ndarray, objective: np.ndarray, reasons: list[str | None], details: list[str]) -> None:
         self.objectives.extend(float(v) for v in objective)
         for reason, detail in zip(reasons, details):
             if reason is not None:
@@ -162,9 +161,7 @@ class UpdatingProblem:
         X = np.clip(X, 0.0, 1.0)
         theta = self.parameters.to_physical(X)
         thetas = [self.parameters.as_dict(t) for t in theta]
-        results = (
-            self.runner(self.model, thetas) if self.runner is not None else modal_many(self.model, thetas)
-        )
+        results = self.runner(self.model, thetas) if self.runner is not None else modal_many(self.model, thetas)
         n, r = len(thetas), self.n_residuals
         residuals = np.empty((n, r))
         ok = np.ones(n, dtype=bool)
@@ -253,15 +250,4 @@ class UpdatingProblem:
 
     def mode_table(self, theta: np.ndarray) -> pd.DataFrame:
         """One row per measured mode at physical point theta: f, error %, MAC, matched."""
-        corr = self.correlation_at(theta)
-        return pd.DataFrame(
-            {
-                "mode": np.arange(1, self.measured.n_modes + 1),
-                "label": list(self.measured.labels),
-                "f_measured_hz": corr.f_measured_hz,
-                "f_model_hz": corr.f_model_hz,
-                "error_pct": 100.0 * corr.frequency_error,
-                "mac": corr.mac,
-                "matched": corr.matched,
-            }
-        )
+        return correlation_table(self.correlation_at(theta), self.measured)

@@ -35,6 +35,7 @@ from framework.discrepancy.detect import DEFAULT_ALPHA, Detection, detect
 from framework.discrepancy.effects import Catalogue
 from framework.discrepancy.score import DECISIVE_DELTA_BIC, NO_CHANGE, Ranking, rank
 from framework.measurements import MeasuredModes
+from framework.objectives import correlation_table
 from framework.parameters import Parameter, ParameterSet
 
 log = logging.getLogger(__name__)
@@ -137,23 +138,10 @@ class Diagnosis:
             ("before", self.before, self.rounds[0].detection),
             ("after", self.after, self.rounds[-1].detection),
         ):
-            c = fit.correlation
-            modes.append(
-                pd.DataFrame(
-                    {
-                        "stage": stage,
-                        "model": fit.label,
-                        "mode": np.arange(1, self.measured.n_modes + 1),
-                        "label": list(self.measured.labels),
-                        "f_measured_hz": c.f_measured_hz,
-                        "f_model_hz": c.f_model_hz,
-                        "error_pct": 100 * c.frequency_error,
-                        "mac": c.mac,
-                        "matched": c.matched,
-                        "z_frequency": det.modes["z_frequency"].to_numpy(),
-                    }
-                )
-            )
+            table = correlation_table(fit.correlation, self.measured)
+            table.insert(0, "model", fit.label)
+            table.insert(0, "stage", stage)
+            modes.append(table.assign(z_frequency=det.modes["z_frequency"].to_numpy()))
         cands = [r.ranking.table.assign(round=r.index + 1) for r in self.rounds if r.ranking is not None]
         params = []
         for stage, fit in (("before", self.before), ("after", self.after)):
