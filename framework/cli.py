@@ -41,12 +41,9 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_report(args) -> int:
-    from framework.plots import report
+    from framework.study.runner import report
 
-    root = Path(args.results_dir)
-    if not root.exists():
-        raise InputError(f"results folder not found: {root}")
-    files = report(root)
+    files = report(Path(args.results_dir))
     for f in files:
         sys.stdout.write(f"{f}\n")
     return 0
@@ -54,18 +51,13 @@ def _cmd_report(args) -> int:
 
 def _cmd_validate(args) -> int:
     from framework.study.config import load
-    from framework.study.execute import build_problem
     from framework.study.plan import plan
     from framework.study.runner import preflight
 
     cfg = load(args.config, args.set)
     specs = plan(cfg)
-    preflight(specs)
-    problem = build_problem(specs[0]["config"])
-    sys.stdout.write(
-        f"{args.config}: OK - {len(specs)} runs, structure {cfg.structure.name!r}, "
-        f"{problem.measured.n_modes} measured modes, parameters {problem.parameters.names}\n"
-    )
+    preflight(cfg, specs)
+    sys.stdout.write(f"{args.config}: OK - kind {cfg.kind!r}, {len(specs)} runs\n")
     return 0
 
 

@@ -1,12 +1,11 @@
-"""Figures drawn from the tidy tables only (never from in-memory state).
+"""Figures of updating studies, drawn from the tidy tables only (never from in-memory state).
 
-``report(results_dir)`` regenerates every figure a study's tables support:
+``updating_figures(tables, out_dir)`` draws every figure the tables support:
 convergence.png (best objective vs evaluations: median and 10-90 % band per label),
 parameters.png (ratio to initial value per parameter and label, one point per run),
 frequencies.png (updated vs measured frequency error and MAC per mode, base case),
-validation.png (predicted vs measured frequency error per validation case),
-selection.png and convergence_summary.csv when the config has ``options.selection``
-(parameter-selection studies, :mod:`framework.study.selection`).
+validation.png (predicted vs measured frequency error per validation case).
+Analyses named in a config's ``report`` section add their own (:mod:`framework.analysis`).
 """
 
 from __future__ import annotations
@@ -22,8 +21,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
-from framework.io import save_figure
-from framework.study.store import read_table  # noqa: E402
+from framework.io import save_figure  # noqa: E402
 
 log = logging.getLogger(__name__)
 
@@ -121,16 +119,10 @@ def validation(modes: pd.DataFrame, path: Path) -> None:
     _save(g.figure, path)
 
 
-def report(results_dir: str | Path) -> list[Path]:
-    """Regenerate all figures of a results folder from its tables; returns the files."""
-    root = Path(results_dir)
+def updating_figures(tables: dict[str, pd.DataFrame], out_dir: Path) -> list[Path]:
+    """Every figure the tables of an updating study support; returns the files written."""
+    root = Path(out_dir)
     written = []
-    tables = {}
-    for name in ("runs", "parameters", "modes", "history"):
-        try:
-            tables[name] = read_table(root, name)
-        except FileNotFoundError:
-            continue
     sns.set_theme(style="whitegrid", context="paper")
     jobs = [
         ("history", convergence, "convergence.png"),
@@ -148,23 +140,7 @@ def report(results_dir: str | Path) -> list[Path]:
                 written.append(root / name)
         except Exception as exc:  # a figure must not lose the tables
             log.warning("figure %s failed: %s", name, exc)
-    selection = _config_options(root).get("selection")
-    if selection and "runs" in tables and "history" in tables:
-        from framework.study.selection import summarize
-
-        summarize(root, tolerance=selection.get("tolerance", 1e-5),
-                  reference_objective=selection.get("reference_objective"), title=root.name)
-        written.append(root / "selection.png")
     return written
-
-
-def _config_options(root: Path) -> dict:
-    import yaml
-
-    path = root / "config.yaml"
-    if not path.exists():
-        return {}
-    return (yaml.safe_load(path.read_text()) or {}).get("options") or {}
 
 
 def _save(fig, path: Path) -> None:

@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.external import analyse, distinct_minima, final_points, method_summary
-from framework.study.store import write_table
+from framework.analysis import minima as minima_analysis
+from framework.analysis.minima import distinct_minima, final_points, method_summary
 
 NAMES = ["alpha_1", "alpha_2", "alpha_3"]
 
@@ -82,13 +82,14 @@ def test_summary_minima_and_bounds(tmp_path):
     assert minima["n_points"].tolist() == [3, 1, 3]
     assert minima.loc[0, "methods"] == "pso, sm"
     assert labels.tolist().count(1) == 3
-    for name, df in (("runs", runs), ("parameters", params), ("extra", extra)):
-        write_table(df, tmp_path / name)
-    out = analyse(tmp_path)
+    tables = {"runs": runs, "parameters": params, "extra": extra}
+    out = minima_analysis.tables(tables)
     bounds = out["bounds"].set_index(["method", "parameter"])
     assert bounds.loc[("sm", "alpha_3"), "share_at_lower"] == pytest.approx(1 / 3)  # x = 0, 0.01 (not at it), 1
     assert bounds.loc[("sm", "alpha_3"), "share_at_upper"] == pytest.approx(1 / 3)
     alphas = out["alphas"].set_index(["statistic", "method"])
     assert alphas.loc[("best", "sm"), "alpha_1"] == pytest.approx(-0.6)
-    for name in ("summary.csv", "minima.csv", "bounds.csv", "objective_distribution.png", "distinct_minima.png"):
-        assert (tmp_path / name).stat().st_size > 0
+    files = minima_analysis.figures({**tables, **out}, tmp_path)
+    assert {f.name for f in files} >= {"objective_distribution.png", "distinct_minima.png"}
+    for f in files:
+        assert f.stat().st_size > 0

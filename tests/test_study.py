@@ -157,15 +157,13 @@ def test_report_regenerates_figures_from_tables_alone(tmp_path, capsys):
 
 
 def test_selection_summary_marks_converged_settings(tmp_path):
-    from framework.study.selection import summarize
-
     out = tmp_path / "sel"
-    data = dict(SMALL, output=str(out), validation=[], options={"selection": {"tolerance": 1e-5}},
+    data = dict(SMALL, output=str(out), validation=[], report={"selection": {"tolerance": 1e-5}},
                 algorithms={"sm": {"algorithm": "sm", "settings": {"start": "random"}},
                             "pso_tiny": {"algorithm": "pso", "settings": {"swarm_size": 2},
                                          "budget": {"max_evaluations": 20}}})
-    run_study(validate(data), figures=False)
-    summary = summarize(out, tolerance=1e-5).set_index("label")
+    run_study(validate(data))
+    summary = pd.read_csv(out / "convergence_summary.csv").set_index("label")
     assert bool(summary.loc["sm", "converged"]) and not bool(summary.loc["pso_tiny", "converged"])
     assert summary.loc["pso_tiny", "result"] == "not converged"
     assert (out / "selection.png").exists()

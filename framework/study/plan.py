@@ -1,10 +1,15 @@
-"""Expand a study config into run specs: sweep grid x algorithms x seeds.
+"""Expand a study config into run specs: named variants x sweep grid x the kind's runs.
 
-A run spec is a small, picklable dict holding everything one run needs. Its identity
-``run_id`` is a hash of what determines its result (structure, data, parameters,
-objective, budget, algorithm and settings, seed) - not of the output folder or backend -
-so ``--resume`` recognises a run that is already stored, and sweeping one algorithm's
-settings does not duplicate the runs of the others.
+A run spec is a small, picklable dict::
+
+    {"run_id", "study", "kind", "label", "variant", "seed", "columns", "task"}
+
+``task`` is everything the run needs (the kind decides what); ``columns`` are the settings
+that distinguish this run, written as typed columns into every table; ``run_id`` is a hash
+of what determines the run's result (the kind, its task's identity and the seed) and of
+nothing else: not the study name, output folder, backend, progress bars or report options.
+So ``--resume`` recognises a stored run, changing a figure option keeps every stored run,
+and sweeping one algorithm's setting does not duplicate the runs of the others.
 """
 
 from __future__ import annotations
@@ -14,73 +19,93 @@ import itertools
 import json
 from typing import Any
 
-from framework.study.config import StudyConfig, set_path, validate
+from framework.errors import InputError
+from framework.study.config import set_path, validate
+from framework.study.kinds import get_kind
+from framework.study.schema import MAX_PLANNED_RUNS, StudyHeader
 
-IDENTITY_FIELDS = ("structure", "measured", "validation", "parameters", "objective", "kind", "options")
 
-
-def _canonical(obj: Any) -> str:
+def canonical(obj: Any) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), default=str)
 
 
-def run_id(spec: dict) -> str:
-    ident = {k: spec["config"][k] for k in IDENTITY_FIELDS}
-    ident.update(
-        algorithm=spec["algorithm"], settings=spec["settings"], budget=spec["budget"], seed=spec["seed"]
-    )
-    return hashlib.sha1(_canonical(ident).encode()).hexdigest()[:16]
+def run_id(kind: str, identity: dict, seed: int) -> str:
+    """16 hex digits of sha1 over the kind, the task's identity and the seed."""
+    return hashlib.sha1(canonical({"kind": kind, "task": identity, "seed": seed}).encode()).hexdigest()[:16]
 
 
-def expand_sweep(cfg: StudyConfig) -> list[tuple[dict, StudyConfig]]:
-    """Every combination of the sweep values, as (values, config with them applied)."""
-    if not cfg.sweep:
-        return [({}, cfg)]
+def column_names(keys: list[str]) -> dict[str, str]:
+    """Column name of each swept dotted path: its last part, or the whole path (``.`` -> ``_``)
+    where two swept paths end alike."""
+    last = [k.split(".")[-1] for k in keys]
+    return {k: (t if last.count(t) == 1 else k.replace(".", "_")) for k, t in zip(keys, last)}
+
+
+def expand(cfg: StudyHeader) -> list[tuple[str, dict[str, Any], StudyHeader]]:
+    """Every (variant name, sweep values, config with both applied)."""
+    variants = cfg.variants or {"": {}}
     keys = list(cfg.sweep)
-    out = []
+    combos = list(itertools.product(*(cfg.sweep[k] for k in keys))) if keys else [()]
+    if len(variants) * len(combos) > MAX_PLANNED_RUNS:
+        raise InputError(f"study {cfg.study!r}: {len(variants) * len(combos)} variants exceed the limit of "
+                         f"{MAX_PLANNED_RUNS}")
+    if not cfg.variants and not keys:
+        return [("", {}, cfg)]
     base = cfg.model_dump(mode="json")
-    base["sweep"] = {}
-    for combo in itertools.product(*(cfg.sweep[k] for k in keys)):
-        data = json.loads(json.dumps(base))
-        values = dict(zip(keys, combo))
-        for key, value in values.items():
-            set_path(data, key, value)
-        out.append((values, validate(data, source=f"sweep {values}")))
+    base["sweep"], base["variants"] = {}, {}
+    out = []
+    for name, overrides in variants.items():
+        for combo in combos:
+            data = json.loads(json.dumps(base))
+            for key, value in overrides.items():
+                set_path(data, key, value)
+            values = dict(zip(keys, combo))
+            for key, value in values.items():
+                set_path(data, key, value)
+            where = ", ".join(filter(None, [f"variant {name!r}" if name else "", f"sweep {values}" if values else ""]))
+            out.append((name, values, validate(data, source=f"{cfg.study} ({where})")))
     return out
 
 
-def plan(cfg: StudyConfig) -> list[dict]:
+def variant_label(name: str, values: dict[str, Any], names: dict[str, str]) -> str:
+    parts = [name] if name else []
+    parts += [f"{names[k]}={v}" for k, v in values.items()]
+    return ",".join(parts) or "default"
+
+
+def plan(cfg: StudyHeader) -> list[dict]:
     """All run specs of a study, in a stable order, without duplicates."""
+    kind = get_kind(cfg.kind)
+    identity_of = getattr(kind, "identity", lambda task: task)
+    names = column_names(list(cfg.sweep))
     specs: list[dict] = []
     seen: set[str] = set()
-    for values, variant_cfg in expand_sweep(cfg):
-        data = variant_cfg.model_dump(mode="json")
-        variant = ",".join(f"{k.split('.')[-1]}={v}" for k, v in values.items()) or "default"
-        for label, alg in variant_cfg.algorithms.items():
-            relevant = {
-                k: v
-                for k, v in values.items()
-                if not k.startswith("algorithms.") or k.startswith(f"algorithms.{label}.")
+    for name, values, vcfg in expand(cfg):
+        for part in kind.plan_runs(vcfg, values):
+            relevant = {k: v for k, v in values.items() if k in part.get("relevant", values)}
+            columns = {names[k]: _scalar(v) for k, v in relevant.items()}
+            columns.update(part.get("columns", {}))
+            spec = {
+                "study": cfg.study,
+                "kind": cfg.kind,
+                "label": part["label"],
+                "variant": variant_label(name, relevant, names),
+                "seed": int(part["seed"]),
+                "columns": columns,
+                "task": part["task"],
             }
-            if values and not relevant and any(k.startswith("algorithms.") for k in values):
-                variant_label = "default"
-            else:
-                variant_label = ",".join(f"{k.split('.')[-1]}={v}" for k, v in relevant.items()) or variant
-            budget = {**data["budget"], **alg.budget}
-            for i in range(alg.runs or variant_cfg.runs):
-                spec = {
-                    "study": variant_cfg.study,
-                    "label": label,
-                    "algorithm": alg.algorithm,
-                    "settings": alg.settings,
-                    "budget": budget,
-                    "seed": variant_cfg.seed + i,
-                    "run_index": i,
-                    "variant": variant_label,
-                    "config": data,
-                }
-                spec["run_id"] = run_id(spec)
-                if spec["run_id"] in seen:
-                    continue
-                seen.add(spec["run_id"])
-                specs.append(spec)
+            spec["run_id"] = run_id(cfg.kind, identity_of(part["task"]), spec["seed"])
+            if spec["run_id"] in seen:
+                continue
+            seen.add(spec["run_id"])
+            specs.append(spec)
+            if len(specs) > MAX_PLANNED_RUNS:
+                raise InputError(f"study {cfg.study!r}: more than {MAX_PLANNED_RUNS} runs planned")
     return specs
+
+
+def _scalar(value: Any) -> Any:
+    """A column value: scalars as they are, anything else as canonical JSON text."""
+    if value is None or isinstance(value, bool | int | float | str):
+        return value
+    return canonical(value)

@@ -20,7 +20,6 @@ import numpy as np
 import pandas as pd
 
 from framework.io import save_figure
-from framework.study.store import read_table, write_table
 
 
 def convergence_summary(runs: pd.DataFrame, history: pd.DataFrame, tolerance: float = 1e-5,
@@ -72,12 +71,20 @@ def selection_figure(summary: pd.DataFrame, path: Path, title: str = "") -> None
     save_figure(fig, path, dpi=130, tight=False)
 
 
-def summarize(results_dir: str | Path, tolerance: float = 1e-5, reference_objective: float | None = None,
-              title: str = "") -> pd.DataFrame:
-    """Write convergence_summary.csv/.parquet and selection.png from a study's tables."""
-    root = Path(results_dir)
-    summary = convergence_summary(read_table(root, "runs"), read_table(root, "history"), tolerance,
-                                  reference_objective)
-    write_table(summary, root / "convergence_summary")
-    selection_figure(summary, root / "selection.png", title)
-    return summary
+def tables(tables: dict[str, pd.DataFrame], tolerance: float = 1e-5,
+           reference_objective: float | None = None, title: str = "") -> dict[str, pd.DataFrame]:
+    """``convergence_summary`` from the runs and history tables."""
+    if "runs" not in tables or "history" not in tables or tables["runs"].empty:
+        return {}
+    return {"convergence_summary": convergence_summary(tables["runs"], tables["history"], tolerance,
+                                                       reference_objective)}
+
+
+def figures(tables: dict[str, pd.DataFrame], out_dir: Path, title: str = "", **_) -> list[Path]:
+    """selection.png from the convergence_summary table."""
+    summary = tables.get("convergence_summary")
+    if summary is None or summary.empty:
+        return []
+    path = Path(out_dir) / "selection.png"
+    selection_figure(summary, path, title or Path(out_dir).name)
+    return [path]

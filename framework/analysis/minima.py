@@ -1,6 +1,7 @@
-"""Analysis of the external (SMU) benchmark studies, from the tidy tables only.
+"""Distinct minima and method comparison of an updating study, from the tidy tables only.
 
-``python -m framework.external results/external/<study>`` writes, next to the study's tables:
+Asked for with ``report: {minima: {x_tol: 0.05, bound_tol: 0.001}}`` (the external SMU
+studies); ``gomu report results/external/<study>`` writes, next to the study's tables:
 
 - ``summary.csv``: per method (label, variant): runs, best / median / worst objective,
   mean and total evaluations and wall time, runs within 1 % of the study's best value;
@@ -21,7 +22,6 @@ from __future__ import annotations
 import json
 import logging
 import re
-import sys
 from pathlib import Path
 
 import matplotlib
@@ -32,8 +32,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
-from framework.io import atomic_write_text, save_figure  # noqa: E402
-from framework.study.store import read_table  # noqa: E402
+from framework.io import save_figure  # noqa: E402
 
 log = logging.getLogger(__name__)
 
@@ -247,54 +246,43 @@ def plot_alphas(parameters: pd.DataFrame, path: Path) -> None:
 
 
 # ---- driver -------------------------------------------------------------------------------
-def analyse(root: str | Path, x_tol: float = 0.05, bound_tol: float = 1e-3) -> dict[str, pd.DataFrame]:
-    """Write the analysis tables and figures of one results folder; return the tables."""
-    root = Path(root)
-    runs, parameters = read_table(root, "runs"), read_table(root, "parameters")
-    try:
-        extra = read_table(root, "extra")
-    except FileNotFoundError:
-        extra = None
+def tables(tables: dict[str, pd.DataFrame], x_tol: float = 0.05, bound_tol: float = 1e-3) -> dict[str, pd.DataFrame]:
+    """summary, bounds, alphas and minima tables from the runs, parameters and extra tables."""
+    runs, parameters = tables.get("runs"), tables.get("parameters")
+    if runs is None or parameters is None or parameters.empty:
+        return {}
     names = parameter_names(parameters)
     out = {
         "summary": method_summary(runs),
         "bounds": at_bounds(parameters, bound_tol),
         "alphas": alpha_table(runs, parameters),
     }
-    points = final_points(runs, parameters, extra)
+    points = final_points(runs, parameters, tables.get("extra"))
     out["minima"], _ = distinct_minima(points, names, x_tol)
     structure = runs["structure"].dropna().iloc[0] if "structure" in runs and runs["structure"].notna().any() else ""
-    for name, df in out.items():
+    for df in out.values():
         df.insert(0, "structure", structure)
-        atomic_write_text(root / f"{name}.csv", df.to_csv(index=False))
+    return out
+
+
+def figures(tables: dict[str, pd.DataFrame], out_dir: Path, **_) -> list[Path]:
+    """objective_distribution.png, cost.png, distinct_minima.png, alphas.png from the tables."""
+    root = Path(out_dir)
+    runs, parameters, minima = tables.get("runs"), tables.get("parameters"), tables.get("minima")
+    if runs is None or parameters is None or minima is None:
+        return []
+    names = parameter_names(parameters)
     sns.set_theme(style="whitegrid", context="paper")
+    written = []
     for fn, args, fname in (
         (plot_objectives, (runs,), "objective_distribution.png"),
         (plot_cost, (runs,), "cost.png"),
-        (plot_minima, (out["minima"], names), "distinct_minima.png"),
+        (plot_minima, (minima, names), "distinct_minima.png"),
         (plot_alphas, (parameters,), "alphas.png"),
     ):
         try:
             fn(*args, root / fname)
+            written.append(root / fname)
         except Exception as exc:  # a figure must not lose the tables
             log.warning("figure %s failed: %s", fname, exc)
-    return out
-
-
-def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    if not argv:
-        sys.stderr.write("usage: python -m framework.external RESULTS_DIR [RESULTS_DIR ...]\n")
-        return 2
-    for root in argv:
-        tables = analyse(root)
-        with pd.option_context("display.width", 200, "display.max_columns", 30):
-            sys.stdout.write(
-                f"== {root}\n{tables['summary'].to_string(index=False, float_format=lambda v: f'{v:.4g}')}\n"
-            )
-            sys.stdout.write(f"distinct minima: {len(tables['minima'])}\n")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
+    return written

@@ -1,0 +1,469 @@
+"""Run kind ``updating``: one optimizer run on one model-updating problem.
+
+A study lists algorithms (each an optimizer with settings, runs and budget overrides); each
+run updates the structure's parameters to the measured modes and predicts the validation
+cases with the updated values. Tables:
+
+- ``runs``: one row per run: structure, algorithm, objective (best Pi), n_evaluations,
+  n_iterations, wall_s, status (target, stalled, converged, budget, max_iterations,
+  completed, failed, error), error, n_failed_evaluations, failures, message,
+  condition_number (SM), and every optimizer setting as its own column;
+- ``parameters``: run x parameter: unit, initial, lower, upper, value, ratio, normalized
+  (no rows for a failed run: a failed point is not an updated value);
+- ``modes``: run x case x measured mode: f_measured_hz, f_model_hz, error_pct, mac, matched;
+- ``history``: best objective so far at every evaluation where it improved, and the last;
+- ``extra``: optimizer-specific facts as JSON text (SNT minima, singular values, ...).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import AfterValidator, ConfigDict, Field, StrictInt, ValidationError, field_validator, model_validator
+
+from framework.errors import InputError, ModelEvaluationError
+from framework.measurements import MeasuredModes
+from framework.measurements import load as load_measured
+from framework.models.registry import builtin_measured, make_structure
+from framework.objectives import ObjectiveSpec, RatioConstraint
+from framework.optimizers import OPTIMIZERS, Budget, run_optimizer, settings_model
+from framework.parameters import ParameterSet
+from framework.problem import UpdatingProblem
+from framework.study.schema import Strict, StudyHeader
+
+log = logging.getLogger(__name__)
+
+TABLES = ("runs", "parameters", "modes", "history", "extra")
+
+#: largest magnitude accepted for a bound or initial value (keeps spans finite)
+MAX_MAGNITUDE = 1e100
+
+
+# ---- schema ------------------------------------------------------------------------------
+class StructureConfig(Strict):
+    name: str = Field(min_length=1)
+    options: dict[str, Any] = Field(default_factory=dict)
+
+
+class MeasuredConfig(Strict):
+    """Either a built-in data set (``builtin`` + ``case``) or a file (YAML/CSV)."""
+
+    builtin: str | None = None
+    case: str = "base"
+    file: str | None = None
+    #: 1-based subset of the measured modes to use
+    modes: list[StrictInt] | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        if (self.builtin is None) == (self.file is None):
+            raise ValueError("give exactly one of 'builtin' or 'file'")
+        if self.modes is not None:
+            if not self.modes:
+                raise ValueError("modes: give at least one mode number, or leave it out for all")
+            bad = [m for m in self.modes if m < 1]
+            if bad:
+                raise ValueError(f"modes are numbered from 1, got {bad}")
+            if len(set(self.modes)) != len(self.modes):
+                raise ValueError(f"modes are repeated: {self.modes}")
+        return self
+
+
+class ValidationCase(Strict):
+    case: str = Field(min_length=1)
+    structure_options: dict[str, Any] = Field(default_factory=dict)
+    measured: MeasuredConfig
+
+
+def _check_bounds(b: list[float]) -> list[float]:
+    if len(b) != 2:
+        raise ValueError(f"bounds must be [lower, upper], got {b}")
+    lo, hi = b
+    if not all(np.isfinite(b)) or max(abs(lo), abs(hi)) > MAX_MAGNITUDE:
+        raise ValueError(f"bounds must be finite numbers of magnitude <= 1e100, got [{lo}, {hi}]")
+    if lo > hi:
+        raise ValueError(f"bounds are swapped: [{lo}, {hi}]")
+    if lo == hi:
+        raise ValueError(f"bounds are empty: [{lo}, {hi}]")
+    return b
+
+
+Bounds = Annotated[list[float], AfterValidator(_check_bounds)]
+
+
+class ParametersConfig(Strict):
+    names: list[str] | None = None
+    bounds: dict[str, Bounds] = Field(default_factory=dict)
+
+
+class RatioConstraintConfig(Strict):
+    numerator: str
+    denominator: str
+    weight: float = Field(2e-4, ge=0)
+
+
+class ObjectiveConfig(Strict):
+    alpha: float = Field(1.0, ge=0)
+    beta: float = Field(1.0, ge=0)
+    use_shapes: bool = True
+    pairing: Literal["mac", "order", "frequency"] = "mac"
+    mac_threshold: float = Field(0.5, ge=0, le=1)
+    frequency_window: float | None = Field(None, gt=0)
+    unmatched_penalty: float = Field(1.0, ge=0)
+    failure_penalty: float = Field(1e3, gt=0)
+    ratio_constraints: list[RatioConstraintConfig] = Field(default_factory=list)
+    regularization_tau: float = Field(0.0, ge=0)
+    regularization_space: Literal["ratio", "normalized"] = "ratio"
+    formulation: str = "spec"
+    options: dict[str, Any] = Field(default_factory=dict)
+
+
+class BudgetConfig(Budget):
+    """The optimizers' budget and termination rule, read with strict types."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+
+
+class AlgorithmConfig(Strict):
+    algorithm: str
+    settings: dict[str, Any] = Field(default_factory=dict)
+    runs: StrictInt | None = Field(None, ge=1, le=100_000)
+    budget: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("algorithm")
+    @classmethod
+    def _known(cls, v: str) -> str:
+        if v not in OPTIMIZERS:
+            raise ValueError(f"unknown algorithm {v!r}; known: {sorted(OPTIMIZERS)}")
+        return v
+
+    @model_validator(mode="after")
+    def _settings_valid(self):
+        try:
+            settings_model(self.algorithm).model_validate(self.settings, strict=True)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            loc = ".".join(str(p) for p in first["loc"])
+            msg = "unknown key" if first["type"] == "extra_forbidden" else first["msg"]
+            raise ValueError(
+                f"settings.{loc}: {msg} (value {first.get('input')!r}) for algorithm {self.algorithm!r}"
+            ) from None
+        try:
+            Budget.model_validate(self.budget, strict=True)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            raise ValueError(f"budget.{'.'.join(map(str, first['loc']))}: {first['msg']}") from None
+        return self
+
+
+class Config(StudyHeader):
+    kind: Literal["updating"] = "updating"
+    structure: StructureConfig
+    measured: MeasuredConfig
+    validation: list[ValidationCase] = Field(default_factory=list)
+    parameters: ParametersConfig = Field(default_factory=ParametersConfig)
+    objective: ObjectiveConfig = Field(default_factory=ObjectiveConfig)
+    budget: BudgetConfig = Field(default_factory=BudgetConfig)
+    algorithms: dict[str, AlgorithmConfig]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _legacy_options(cls, data):
+        """``options:`` (analysis options of earlier configs) is read as ``report:``."""
+        if isinstance(data, dict) and "options" in data:
+            data = dict(data)
+            options = data.pop("options")
+            if isinstance(options, dict):
+                data["report"] = {**options, **(data.get("report") or {})}
+            else:
+                data["options"] = options  # let the schema name the bad value
+        return data
+
+    @field_validator("report")
+    @classmethod
+    def _report(cls, v):
+        from framework.analysis import check_report
+
+        try:
+            return check_report(v)
+        except InputError as exc:
+            raise ValueError(str(exc)) from None
+
+    @field_validator("algorithms")
+    @classmethod
+    def _non_empty(cls, v):
+        if not v:
+            raise ValueError("at least one algorithm is required")
+        return v
+
+
+def check(cfg: Config, source: str, base_dir: Path | None = None) -> None:
+    """Resolve data-file paths (relative to the config's folder if not found as given)."""
+    files = [("measured.file", cfg.measured)] + [
+        (f"validation[{i}].measured.file", v.measured) for i, v in enumerate(cfg.validation)
+    ]
+    for field_name, measured in files:
+        if measured.file is None:
+            continue
+        path = Path(measured.file)
+        if not path.is_absolute() and not path.exists() and base_dir is not None and (base_dir / path).exists():
+            path = base_dir / path
+        if not path.exists():
+            raise InputError(f"{source}: {field_name}: file not found: {measured.file}")
+        if path.is_dir():
+            raise InputError(f"{source}: {field_name}: is a folder, not a data file: {measured.file}")
+        measured.file = str(path)
+
+
+# ---- plan --------------------------------------------------------------------------------
+def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
+    """One run per algorithm entry and seed; the task holds everything the run needs."""
+    data = cfg.model_dump(mode="json")
+    common = {k: data[k] for k in ("structure", "measured", "validation", "parameters", "objective")}
+    parts = []
+    for label, alg in cfg.algorithms.items():
+        settings = settings_model(alg.algorithm).model_validate(alg.settings).model_dump(mode="json")
+        budget = Budget.model_validate({**data["budget"], **alg.budget}).model_dump(mode="json")
+        relevant = [k for k in sweep_values if not k.startswith("algorithms.") or k.startswith(f"algorithms.{label}.")]
+        task = {**common, "algorithm": alg.algorithm, "settings": settings, "budget": budget,
+                "execution": data["execution"]}
+        columns = {"structure": cfg.structure.name, "algorithm": alg.algorithm}
+        for i in range(alg.runs or cfg.runs):
+            parts.append({"label": label, "seed": cfg.seed + i, "task": task, "columns": columns,
+                          "relevant": relevant})
+    return parts
+
+
+def identity(task: dict) -> dict:
+    """What determines a run's result: the task without execution settings, with each data
+    file replaced by a hash of its content (so moving a file or the project keeps the id)."""
+    ident = {k: v for k, v in task.items() if k != "execution"}
+    ident["measured"] = _measured_identity(task["measured"])
+    ident["validation"] = [{**c, "measured": _measured_identity(c["measured"])} for c in task["validation"]]
+    return ident
+
+
+def _measured_identity(measured: dict) -> dict:
+    if not measured.get("file"):
+        return measured
+    try:
+        digest = hashlib.sha256(Path(measured["file"]).read_bytes()).hexdigest()
+    except OSError:
+        digest = f"unreadable:{measured['file']}"
+    return {**{k: v for k, v in measured.items() if k != "file"}, "file_sha256": digest}
+
+
+# ---- problem -----------------------------------------------------------------------------
+def measured_from(cfg: dict) -> MeasuredModes:
+    m = load_measured(cfg["file"]) if cfg.get("file") else builtin_measured(cfg["builtin"], cfg.get("case", "base"))
+    if cfg.get("modes"):
+        too_high = [i for i in cfg["modes"] if i > m.n_modes]
+        if too_high:
+            raise InputError(f"{m.source}: measured.modes: mode(s) {too_high} do not exist; the data have "
+                             f"{m.n_modes} modes")
+        m = m.select([i - 1 for i in cfg["modes"]])
+    return m
+
+
+def objective_from(cfg: dict) -> ObjectiveSpec:
+    data = dict(cfg)
+    data["ratio_constraints"] = tuple(RatioConstraint(**c) for c in data.get("ratio_constraints", []))
+    return ObjectiveSpec(**data)
+
+
+def parameters_from(model, cfg: dict) -> ParameterSet:
+    params = model.parameters
+    if cfg.get("names"):
+        params = params.subset(cfg["names"])
+    if cfg.get("bounds"):
+        params = params.with_bounds({k: tuple(v) for k, v in cfg["bounds"].items()})
+    return params
+
+
+def build_problem(task: dict, structure_options: dict | None = None, measured_cfg: dict | None = None,
+                  runner=None) -> UpdatingProblem:
+    """The updating problem of a task (or of one of its validation cases)."""
+    options = {**task["structure"]["options"], **(structure_options or {})}
+    model = make_structure(task["structure"]["name"], **options)
+    measured = measured_from(measured_cfg or task["measured"])
+    return UpdatingProblem(model, measured, parameters_from(model, task["parameters"]),
+                           objective_from(task["objective"]), runner=runner)
+
+
+def preflight(specs: list[dict]) -> None:
+    """Build every distinct problem of the plan (model, data, parameters, objective) before any
+    run starts, so bad input fails early with an InputError naming the field and value."""
+    seen = set()
+    for spec in specs:
+        task = spec["task"]
+        key = json.dumps({k: task[k] for k in ("structure", "measured", "validation", "parameters", "objective")},
+                         sort_keys=True, default=str)
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            build_problem(task)
+            for case in task.get("validation", []):
+                build_problem(task, structure_options=case["structure_options"], measured_cfg=case["measured"])
+        except InputError as exc:
+            raise InputError(f"study {spec['study']!r}: {exc}") from None
+        except (KeyError, ValueError, TypeError) as exc:
+            raise InputError(f"study {spec['study']!r}: {type(exc).__name__}: {exc}") from None
+
+
+# ---- one run -----------------------------------------------------------------------------
+def _evaluation_bar(spec: dict):
+    """A progress bar over evaluations, for long runs executed in the foreground process."""
+    execution = spec["task"].get("execution", {})
+    if not execution.get("progress_evaluations") or execution.get("backend", "serial") != "serial":
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=spec["task"]["budget"]["max_evaluations"], desc=f"{spec['label']} seed {spec['seed']}",
+                unit="eval", leave=False, position=1)
+
+
+def evaluation_runner(execution: dict):
+    """The runner for a run's model evaluations, from ``execution.evaluation_backend``.
+
+    "processes": a local pool of ``workers`` processes; "dask": the cluster this run executes
+    on (inside a Dask worker) or the one at ``scheduler``. Returns (runner, close).
+    """
+    backend = execution.get("evaluation_backend", "serial")
+    if backend == "serial":
+        return None, lambda: None
+    if backend == "processes":
+        from framework.parallel import ProcessRunner
+
+        runner = ProcessRunner(execution.get("workers", 2))
+        return runner, runner.close
+    from distributed import Client, get_worker
+
+    from framework.parallel import DaskRunner
+
+    try:
+        get_worker()
+        return DaskRunner(None), lambda: None  # inside a Dask worker: use its cluster
+    except ValueError:
+        pass
+    if not execution.get("scheduler"):
+        raise ValueError("execution.evaluation_backend=dask needs execution.scheduler outside a Dask worker")
+    client = Client(execution["scheduler"])
+    return DaskRunner(client), client.close
+
+
+def run(spec: dict) -> dict[str, list[dict]]:
+    """One optimizer run and the rows of every table."""
+    task = spec["task"]
+    runner, close = evaluation_runner(task.get("execution", {}))
+    try:
+        return _run(spec, task, runner)
+    finally:
+        close()
+
+
+def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
+    tables: dict[str, list[dict]] = {t: [] for t in TABLES}
+    problem = build_problem(task, runner=runner)
+    bar = _evaluation_bar(spec)
+    if bar is not None:
+        problem.log.on_record = bar.update
+    try:
+        result = run_optimizer(task["algorithm"], problem, spec["seed"], Budget(**task["budget"]), **task["settings"])
+    finally:
+        if bar is not None:
+            bar.close()
+    failed = result.status == "failed"
+    tables["runs"].append({
+        "objective": result.objective,
+        "n_evaluations": result.n_evaluations,
+        "n_iterations": result.n_iterations,
+        "wall_s": result.wall_s,
+        "status": result.status,
+        "error": "",
+        "n_failed_evaluations": result.n_failed,
+        "failures": result.failures,
+        "message": result.message,
+        "condition_number": result.extra.get("condition_number", np.nan),
+        **setting_columns(task["settings"]),
+    })
+    tables["history"] = history_rows(result.history)
+    tables["extra"] = extra_rows(result.extra)
+    if failed:
+        return tables
+    params = problem.parameters
+    ratios = params.to_ratio(result.theta_best)
+    for p, value, ratio, x in zip(params, result.theta_best, ratios, result.x_best):
+        tables["parameters"].append({"parameter": p.name, "unit": p.unit, "initial": p.initial, "lower": p.lower,
+                                     "upper": p.upper, "value": float(value), "ratio": float(ratio),
+                                     "normalized": float(x)})
+    tables["modes"] += mode_rows("base", problem, result.theta_best)
+    theta = params.as_dict(result.theta_best)
+    for case in task.get("validation", []):
+        try:
+            vproblem = build_problem(task, structure_options=case["structure_options"], measured_cfg=case["measured"])
+            tables["modes"] += mode_rows(case["case"], vproblem, vproblem.parameters.from_dict(theta))
+        except Exception as exc:  # a failed prediction is a row, not the end of the run
+            tables["modes"].append({"case": case["case"], "mode": 0, "error": f"{type(exc).__name__}: {exc}"})
+    return tables
+
+
+def setting_columns(settings: dict, prefix: str = "") -> dict[str, Any]:
+    """Every optimizer setting as a column; nested settings (SNT's ``pso``) flattened with ``_``,
+    lists as JSON text."""
+    out: dict[str, Any] = {}
+    for key, value in settings.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            out.update(setting_columns(value, f"{name}_"))
+        elif isinstance(value, list):
+            out[name] = json.dumps(value)
+        else:
+            out[name] = value
+    return out
+
+
+def history_rows(history: np.ndarray) -> list[dict]:
+    history = np.asarray(history, float)
+    if history.size == 0:
+        return []
+    keep = np.flatnonzero(np.r_[True, np.diff(history) < 0])
+    if keep[-1] != history.size - 1:
+        keep = np.r_[keep, history.size - 1]
+    return [{"evaluation": int(i + 1), "best_objective": float(history[i])} for i in keep]
+
+
+def mode_rows(case: str, problem: UpdatingProblem, theta: np.ndarray) -> list[dict]:
+    try:
+        table = problem.mode_table(theta)
+    except ModelEvaluationError as exc:
+        return [{"case": case, "mode": 0, "error": str(exc)}]
+    table = table.rename(columns={"label": "mode_label"})
+    return [{"case": case, **row} for row in table.to_dict("records")]
+
+
+def extra_rows(extra: dict[str, Any]) -> list[dict]:
+    """Optimizer-specific facts, one row per key, the value as JSON text."""
+    from framework.study.store import _json_default
+
+    return [{"key": key, "value": json.dumps(value, default=_json_default)} for key, value in extra.items()]
+
+
+# ---- analyses and figures ----------------------------------------------------------------
+def analyses(tables: dict, report: dict) -> dict:
+    """Derived tables named in ``report`` (e.g. ``selection``), from the tables only."""
+    from framework.analysis import run_analyses
+
+    return run_analyses(tables, report)
+
+
+def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
+    from framework.analysis import analysis_figures
+    from framework.plots import updating_figures
+
+    return updating_figures(tables, out_dir) + analysis_figures(tables, out_dir, report)
