@@ -56,8 +56,9 @@ def _cmd_validate(args) -> int:
 
     cfg = load(args.config, args.set)
     specs = plan(cfg)
-    preflight(cfg, specs)
-    sys.stdout.write(f"{args.config}: OK - kind {cfg.kind!r}, {len(specs)} runs\n")
+    preflight(cfg, specs, build_references=args.build)
+    note = "" if args.build else " (code named in the config was not imported; --build to build the models)"
+    sys.stdout.write(f"{args.config}: OK - kind {cfg.kind!r}, {len(specs)} runs{note}\n")
     return 0
 
 
@@ -87,7 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     r.add_argument("--resume", action="store_true", help="keep stored runs and run only the missing ones")
     r.add_argument("--backend", choices=["serial", "processes", "dask"], default=None)
-    r.add_argument("--workers", type=int, default=None)
+    r.add_argument("--workers", type=_positive_int, default=None)
     r.add_argument("--scheduler", default=None, help="Dask scheduler address (implies --backend dask)")
     r.add_argument("--dask", action="store_true", help="start an embedded local Dask cluster")
     r.add_argument("--no-figures", action="store_true")
@@ -101,6 +102,8 @@ def build_parser() -> argparse.ArgumentParser:
     v = sub.add_parser("validate", help="check a config and its data without running anything")
     v.add_argument("config")
     v.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE")
+    v.add_argument("--build", action="store_true",
+                   help="also import and build models and data providers named as module:function")
     v.set_defaults(fn=_cmd_validate)
 
     d = sub.add_parser("diagnose", help="find, name and add the physical effect a model is missing")
@@ -111,13 +114,26 @@ def build_parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("bench", help="evaluations per second per structure and parallel speed-up")
     b.add_argument("structures", nargs="*", default=["lab_frame_3dof"])
-    b.add_argument("--workers", type=int, default=2)
-    b.add_argument("--repeats", type=int, default=3)
+    b.add_argument("--workers", type=_positive_int, default=2)
+    b.add_argument("--repeats", type=_positive_int, default=3)
     b.set_defaults(fn=_cmd_bench)
     return p
 
 
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return value
+
+
 def main(argv: list[str] | None = None) -> int:
+    # as `python -m` does: modules in the current folder (a user's build function) are importable
+    if os.getcwd() not in sys.path and "" not in sys.path:
+        sys.path.insert(0, os.getcwd())
     args = build_parser().parse_args(argv)
     logging.basicConfig(
         level=logging.DEBUG if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s"
@@ -127,6 +143,10 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as exc:
         sys.stderr.write(f"gomu: error: {exc}\n")
         return 2
+    except OSError as exc:  # the disk, not the input: one line, exit 1
+        where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        sys.stderr.write(f"gomu: error: {where}{exc.strerror or exc}\n")
+        return 1
     except KeyboardInterrupt:
         sys.stderr.write("gomu: interrupted; stored runs are kept - rerun with --resume\n")
         return 130

@@ -1,6 +1,7 @@
 """The experiment engine: run identity, settings as columns, the store's guarantees."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -134,3 +135,51 @@ def test_store_ignores_rows_of_unwanted_runs(tmp_path):
     store.write_run("a", {"runs": [{"run_id": "a", "label": "x"}]}, study="s", kind="updating")
     store.write_run("b", {"runs": [{"run_id": "b", "label": "y"}]}, study="s", kind="updating")
     assert store.read_parts({"a"})["runs"]["run_id"].tolist() == ["a"]
+
+
+def test_validate_imports_no_code_named_in_the_config_unless_asked(tmp_path, monkeypatch, capsys):
+    from framework.cli import main
+
+    marker = tmp_path / "imported"
+    (tmp_path / "user_model.py").write_text(
+        "import pathlib\n"
+        f"pathlib.Path({str(marker)!r}).write_text('x')\n"
+        "from framework.models.lab_frame import make_model as _make\n"
+        "def make_model(**options):\n    return _make(**options)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import yaml
+
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(yaml.safe_dump(dict(SMALL, structure={"name": "user_model:make_model"})))
+    assert main(["validate", str(cfg)]) == 0
+    assert not marker.exists()
+    assert "was not imported" in capsys.readouterr().out
+    assert main(["validate", str(cfg), "--build"]) == 0
+    assert marker.exists()
+
+
+@pytest.mark.parametrize("reference", ["os:system", "subprocess:run", "framework.models.lab_frame:np"])
+def test_references_to_non_user_code_are_refused(tmp_path, reference):
+    data = dict(SMALL, measured={"builtin": reference, "case": f"touch {tmp_path / 'pwned'}"},
+                output=str(tmp_path / "o"))
+    with pytest.raises(InputError, match="measured.builtin"):
+        run_study(validate(data), figures=False)
+    assert not (tmp_path / "pwned").exists()
+
+
+def test_gomu_finds_a_module_in_the_current_folder(tmp_path, monkeypatch):
+    import subprocess
+    import sys
+
+    import yaml
+
+    (tmp_path / "mine.py").write_text(
+        "from framework.models.lab_frame import make_model as _make\n"
+        "def make_model(**options):\n    return _make(**options)\n")
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(dict(SMALL, structure={"name": "mine:make_model"})))
+    gomu = Path(sys.executable).parent / "gomu"  # the console script: no '' on sys.path by itself
+    if not gomu.exists():
+        pytest.skip("the gomu console script is not installed")
+    done = subprocess.run([str(gomu), "validate", "c.yaml", "--build"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr

@@ -9,6 +9,7 @@ A user's own model is given in a config as ``structure: {name: "my_pkg.my_mod:ma
 from __future__ import annotations
 
 import importlib
+import sys
 
 from framework.errors import InputError
 
@@ -31,15 +32,37 @@ MEASUREMENTS: dict[str, str] = {
 }
 
 
+def is_reference(name: str) -> bool:
+    """True for a ``module:function`` reference to user code (not a built-in name)."""
+    return isinstance(name, str) and ":" in name and name not in STRUCTURES and name not in MEASUREMENTS
+
+
 def resolve(path: str, what: str):
-    """Import ``module:attribute``; errors name the entry."""
-    if ":" not in path:
+    """Import ``module:function`` and return the function; errors name the entry.
+
+    Trust model: a config that names code is code. Only structure factories and data
+    providers are resolved this way, and only to a function or class defined in the named
+    module (``os:system`` names a function of ``posix`` and is refused); modules of the
+    Python standard library are refused outright.
+    """
+    if not isinstance(path, str) or ":" not in path:
         raise InputError(f"{what}: {path!r} is neither a built-in name nor 'module:function'")
     module, attr = path.split(":", 1)
+    top = module.split(".")[0]
+    if not module or not attr or top in sys.stdlib_module_names:
+        raise InputError(f"{what}: {path!r} is not a structure or data provider of a user module")
     try:
-        return getattr(importlib.import_module(module), attr)
-    except (ImportError, AttributeError) as exc:
-        raise InputError(f"{what}: cannot import {path!r}: {exc}") from exc
+        obj = getattr(importlib.import_module(module), attr)
+    except ImportError as exc:
+        raise InputError(f"{what}: cannot import module {module!r}: {exc}") from None
+    except AttributeError:
+        raise InputError(f"{what}: module {module!r} has no {attr!r}") from None
+    except Exception as exc:  # importing user code ran it and it failed
+        raise InputError(f"{what}: importing {module!r} failed: {type(exc).__name__}: {exc}") from None
+    defined_in = getattr(obj, "__module__", None) or ""
+    if not callable(obj) or not (defined_in == module or defined_in.startswith(module + ".")):
+        raise InputError(f"{what}: {path!r} is not a function or class defined in module {module!r}")
+    return obj
 
 
 def make_structure(name: str, **options):
@@ -47,12 +70,22 @@ def make_structure(name: str, **options):
     factory = resolve(STRUCTURES.get(name, name), f"structure.name={name!r}")
     try:
         return factory(**options)
+    except InputError:
+        raise
     except TypeError as exc:
-        raise InputError(f"structure {name!r}: bad options {sorted(options)}: {exc}") from exc
+        raise InputError(f"structure {name!r}: bad options {sorted(options)}: {exc}") from None
+    except Exception as exc:  # a user's factory can raise anything: one line, not a traceback
+        raise InputError(f"structure {name!r}: building the model failed: {type(exc).__name__}: {exc}") from None
 
 
 def builtin_measured(name: str, case: str = "base"):
     """Measured data set ``name`` (built-in name or 'module:function') for ``case``."""
     if name not in MEASUREMENTS and ":" not in name:
         raise InputError(f"measured.builtin={name!r} unknown; known: {sorted(MEASUREMENTS)}")
-    return resolve(MEASUREMENTS.get(name, name), f"measured.builtin={name!r}")(case)
+    provider = resolve(MEASUREMENTS.get(name, name), f"measured.builtin={name!r}")
+    try:
+        return provider(case)
+    except InputError:
+        raise
+    except Exception as exc:
+        raise InputError(f"measured.builtin={name!r}: case {case!r}: {type(exc).__name__}: {exc}") from None

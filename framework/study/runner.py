@@ -26,11 +26,12 @@ from framework.tables import read_tables, write_table
 log = logging.getLogger(__name__)
 
 
-def preflight(cfg: StudyHeader, specs: list[dict]) -> None:
-    """The kind's checks of every distinct input before any run starts (InputError)."""
+def preflight(cfg: StudyHeader, specs: list[dict], build_references: bool = True) -> None:
+    """The kind's checks of every distinct input before any run starts (InputError).
+    ``build_references=False``: do not import code the config names (``gomu validate``)."""
     check = getattr(get_kind(cfg.kind), "preflight", None)
     if check is not None:
-        check(specs)
+        check(specs, build_references=build_references)
 
 
 def run_study(

@@ -29,7 +29,7 @@ from pydantic import AfterValidator, ConfigDict, Field, StrictInt, ValidationErr
 from framework.errors import InputError, ModelEvaluationError
 from framework.measurements import MeasuredModes
 from framework.measurements import load as load_measured
-from framework.models.registry import builtin_measured, make_structure
+from framework.models.registry import builtin_measured, is_reference, make_structure
 from framework.objectives import ObjectiveSpec, RatioConstraint
 from framework.optimizers import OPTIMIZERS, Budget, run_optimizer, settings_model
 from framework.parameters import ParameterSet
@@ -295,9 +295,12 @@ def build_problem(task: dict, structure_options: dict | None = None, measured_cf
                            objective_from(task["objective"]), runner=runner)
 
 
-def preflight(specs: list[dict]) -> None:
+def preflight(specs: list[dict], build_references: bool = True) -> None:
     """Build every distinct problem of the plan (model, data, parameters, objective) before any
-    run starts, so bad input fails early with an InputError naming the field and value."""
+    run starts, so bad input fails early with an InputError naming the field and value.
+
+    With ``build_references=False`` (``gomu validate`` without ``--build``) code named in the
+    config as ``module:function`` is not imported: only data files are read."""
     seen = set()
     for spec in specs:
         task = spec["task"]
@@ -306,14 +309,26 @@ def preflight(specs: list[dict]) -> None:
         if key in seen:
             continue
         seen.add(key)
+        cases = [(None, task["measured"])] + [(c["structure_options"], c["measured"]) for c in task["validation"]]
         try:
-            build_problem(task)
-            for case in task.get("validation", []):
-                build_problem(task, structure_options=case["structure_options"], measured_cfg=case["measured"])
+            if build_references or not _names_code(task):
+                for options, measured in cases:
+                    build_problem(task, structure_options=options, measured_cfg=measured)
+            else:
+                for _, measured in cases:
+                    if not is_reference(measured.get("builtin") or ""):
+                        measured_from(measured)
         except InputError as exc:
             raise InputError(f"study {spec['study']!r}: {exc}") from None
         except (KeyError, ValueError, TypeError) as exc:
             raise InputError(f"study {spec['study']!r}: {type(exc).__name__}: {exc}") from None
+
+
+def _names_code(task: dict) -> bool:
+    """Does the task name user code (``module:function``) as structure or data provider?"""
+    names = [task["structure"]["name"], task["measured"].get("builtin") or ""]
+    names += [c["measured"].get("builtin") or "" for c in task["validation"]]
+    return any(is_reference(n) for n in names)
 
 
 # ---- one run -----------------------------------------------------------------------------
