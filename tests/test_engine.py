@@ -183,3 +183,11 @@ def test_gomu_finds_a_module_in_the_current_folder(tmp_path, monkeypatch):
     done = subprocess.run([str(gomu), "validate", "c.yaml", "--build"], cwd=tmp_path, capture_output=True,
                           text=True, timeout=120)
     assert done.returncode == 0, done.stderr
+
+
+def test_results_folder_records_provenance(tmp_path):
+    out = tmp_path / "o"
+    run_study(validate(dict(SMALL, output=str(out), runs=1)), figures=False)
+    prov = json.loads((out / "provenance.json").read_text())
+    assert prov["packages"]["numpy"] == __import__("numpy").__version__
+    assert {"git", "python", "platform", "command"} <= set(prov)

@@ -16,6 +16,7 @@ import yaml
 
 from framework.errors import InputError
 from framework.parallel import map_unordered
+from framework.provenance import write_provenance
 from framework.study.execute import error_tables, execute_run
 from framework.study.kinds import get_kind
 from framework.study.plan import plan
@@ -62,6 +63,7 @@ def run_study(
     if not resume:
         store.discard()
     store.write_config(yaml.safe_dump(cfg.model_dump(mode="json"), sort_keys=False))
+    write_provenance(out)
     done = store.stored_ids()
     todo = [s for s in specs if s["run_id"] not in done]
     log.info("study %s: %d runs planned, %d stored, %d to run", cfg.study, len(specs), len(specs) - len(todo),
