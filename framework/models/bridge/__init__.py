@@ -33,7 +33,7 @@ Model (built by :func:`build_bridge`, run through :class:`~framework.models.open
   classified by kinetic-energy share (deck, cables, pylon) and direction.
 
 Evaluation paths: ``make_model(fast=False)`` is the plain :class:`OpenSeesModel`;
-``fast=True`` (default) is :class:`framework.models.bridge_fast.BridgeFastModel`, same
+``fast=True`` (default) is :class:`framework.models.bridge.fast.BridgeFastModel`, same
 build and gravity, own eigen solution (~12x faster, same modes to ~1e-10).
 
 Options (keyword arguments of :func:`make_model` / :func:`build_bridge`):
@@ -614,7 +614,7 @@ def make_model(
     )
     if not fast:
         return plain
-    from framework.models.bridge_fast import BridgeFastModel
+    from framework.models.bridge.fast import BridgeFastModel
 
     return BridgeFastModel(plain, deck_energy_min=deck_energy_min, f_max_hz=f_max_hz)
 
