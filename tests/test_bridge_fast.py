@@ -56,8 +56,8 @@ def test_fast_model_pickles_without_its_operators(models):
 
 
 def _cable_state(fast, theta):
-    from framework.models.bridge import fast as bridge_fast
     from framework.models.base import full_theta
+    from framework.models.bridge import fast as bridge_fast
     from framework.models.opensees import ops_module, run_static
 
     op = fast.operators
