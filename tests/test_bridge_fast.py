@@ -56,8 +56,8 @@ def test_fast_model_pickles_without_its_operators(models):
 
 
 def _cable_state(fast, theta):
-    from framework.models import bridge_fast
     from framework.models.base import full_theta
+    from framework.models.bridge import fast as bridge_fast
     from framework.models.opensees import ops_module, run_static
 
     op = fast.operators
@@ -74,7 +74,7 @@ def _cable_state(fast, theta):
 
 
 def test_symmetry_blocks_equal_full_solution(models):
-    from framework.models import bridge_fast
+    from framework.models.bridge import fast as bridge_fast
 
     fast, _ = models
     op = fast.operators
@@ -90,7 +90,7 @@ def test_symmetry_blocks_equal_full_solution(models):
 
 
 def test_asymmetric_cable_state_uses_full_solution(models):
-    from framework.models import bridge_fast
+    from framework.models.bridge import fast as bridge_fast
 
     fast, _ = models
     _, k3 = _cable_state(fast, {})

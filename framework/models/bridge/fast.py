@@ -48,6 +48,21 @@ import scipy.sparse.linalg as spla
 
 from framework.errors import ModelEvaluationError
 from framework.models.base import ModalResult, full_theta
+from framework.models.bridge.build import cable_tensions_from
+from framework.models.bridge.geometry import (
+    ANCHOR_NODE0,
+    CABLE_AREA_M2,
+    CABLE_NODE0,
+    DECK_LENGTH_M,
+    E_CABLE_PA,
+    GROUND_NODE0,
+    N_DECK_ELEMENTS,
+    PYLON_NODE0,
+    PYLON_X_M,
+    SENSOR_NODE0,
+    deck_node,
+)
+from framework.models.bridge.modes import MODE_TYPES, keep_deck_modes, node_groups
 from framework.models.opensees import OpenSeesModel, ops_module, run_static
 
 log = logging.getLogger(__name__)
@@ -358,14 +373,12 @@ def is_symmetric_state(k3: np.ndarray, op: _Operators, rtol: float = 1e-9) -> bo
 
 def _current_cable_tangent(ops, data: dict, values) -> np.ndarray:
     """Cable tangents (E, 3, 3) of the current OpenSees state."""
-    from framework.models import bridge as b
-
     disp = {int(n): np.asarray(ops.nodeDisp(int(n))[:3]) for n in data["cable_nodes"]}
     force = np.array([ops.eleResponse(int(e), "axialForce")[0] for e in data["cable_elements"]])
     ends = data["cable_ends"]
     xa = np.array([data["coords"][i] + disp[i] for i in ends[:, 0]])
     xb = np.array([data["coords"][j] + disp[j] for j in ends[:, 1]])
-    ea = b.E_CABLE_PA * float(values["K_cable"]) * b.CABLE_AREA_M2
+    ea = E_CABLE_PA * float(values["K_cable"]) * CABLE_AREA_M2
     return cable_tangent(xa, xb, data["length0"], np.full(force.size, ea), force)
 
 
@@ -376,8 +389,6 @@ _MIRROR_SIGNS = {"x": (-1, 1, 1, 1, -1, -1), "y": (1, -1, 1, -1, 1, -1)}
 
 def _point_key(xyz, axis: str | None = None) -> tuple[float, float, float]:
     """Rounded coordinates (to 1 um) of a point or of its mirror image (axis "x" or "y")."""
-    from framework.models.bridge import PYLON_X_M
-
     c = np.asarray(xyz, dtype=float).copy()
     if axis == "x":
         c[0] = 2.0 * PYLON_X_M - c[0]
@@ -392,15 +403,14 @@ def _mirror_maps(ops, n_eq: int, master_of) -> dict[str, tuple[np.ndarray, np.nd
     For each mirror, (target, sign): u_eq[target[i]] = sign[i] u_eq[i] maps a displacement
     field onto its mirror image. None if some equation has no mirror (asymmetric mesh).
     """
-    from framework.models import bridge as b
 
     def kind(n: int) -> int:  # coincident nodes (bearings) differ in kind
-        return int(np.searchsorted([b.PYLON_NODE0, b.GROUND_NODE0, b.ANCHOR_NODE0, b.CABLE_NODE0], n, "right"))
+        return int(np.searchsorted([PYLON_NODE0, GROUND_NODE0, ANCHOR_NODE0, CABLE_NODE0], n, "right"))
 
     owners: dict[tuple, int] = {}
     coords = {}
     for n in ops.getNodeTags():
-        if n in master_of or (b.SENSOR_NODE0 <= n < b.CABLE_NODE0):
+        if n in master_of or (SENSOR_NODE0 <= n < CABLE_NODE0):
             continue  # rigid-link slaves have no equations of their own
         coords[n] = (ops.nodeCoord(n), kind(n))
         for d, eq in enumerate(ops.nodeDOFs(n)):
@@ -425,13 +435,11 @@ def _mirror_maps(ops, n_eq: int, master_of) -> dict[str, tuple[np.ndarray, np.nd
 
 
 def _index_data(ops, info, n_eq: int) -> dict:
-    from framework.models import bridge as b
-
     master_of = {}
     for n in ops.getNodeTags():
-        if b.ANCHOR_NODE0 <= n < b.CABLE_NODE0:
+        if ANCHOR_NODE0 <= n < CABLE_NODE0:
             x = ops.nodeCoord(n)[0]
-            master_of[n] = b.deck_node(int(round(x / (b.DECK_LENGTH_M / b.N_DECK_ELEMENTS))))
+            master_of[n] = deck_node(int(round(x / (DECK_LENGTH_M / N_DECK_ELEMENTS))))
     mirrors = _mirror_maps(ops, n_eq, master_of)
     mass = np.zeros(n_eq)
     for node, m in info.masses.items():
@@ -454,7 +462,7 @@ def _index_data(ops, info, n_eq: int) -> dict:
         rows.append(_translation_map(ops, int(j), master_of, n_eq))
     b_cable = sp.csr_matrix(np.vstack(rows))
     groups = {}
-    for group, nodes in b._groups(info).items():
+    for group, nodes in node_groups(info).items():
         eqs, ms = [], []
         for node in nodes:
             eq = ops.nodeDOFs(node)
@@ -526,8 +534,6 @@ class BridgeFastModel:
         return self._operators
 
     def modal(self, theta: Mapping[str, float]) -> ModalResult:
-        from framework.models import bridge as b
-
         op = self.operators
         ops = ops_module()
         values = dict(self.plain.fixed)
@@ -538,7 +544,7 @@ class BridgeFastModel:
             run_static(ops, self.gravity)
             k3 = _current_cable_tangent(ops, op.__dict__, values)
             force = np.array([ops.eleResponse(int(e), "axialForce")[0] for e in op.cable_elements])
-            tension = b.cable_tensions_from(force, info)
+            tension = cable_tensions_from(force, info)
         finally:
             ops.wipe()
         omega2_max = (2.0 * math.pi * self.f_max_hz) ** 2
@@ -553,7 +559,7 @@ class BridgeFastModel:
         )
         shares = energy_shares_eq(phi, op)
         meta = {"omega2": omega2, "cable_tension_n": tension, "target_tension_n": dict(info.target_tension_n)}
-        return b.keep_deck_modes(freqs, shapes, self.dofs, shares, self.deck_energy_min, meta)
+        return keep_deck_modes(freqs, shapes, self.dofs, shares, self.deck_energy_min, meta)
 
 
 _CONTROLLER: list = []
@@ -625,9 +631,7 @@ def solve_band(k: sp.csr_matrix, mass: np.ndarray, omega2_max: float):
 
 
 def energy_shares_eq(phi: np.ndarray, op: _Operators) -> dict[str, np.ndarray]:
-    """Kinetic-energy shares per group from equation-space modes (same as bridge.energy_shares)."""
-    from framework.models.bridge import MODE_TYPES
-
+    """Kinetic-energy shares per group from equation-space modes (as :func:`.modes.energy_shares`)."""
     energies = {g: (phi[eqs] ** 2).T @ m for g, (eqs, m) in op.group_eqs.items()}
     total = sum(energies.values())
     out = {f"{g}_energy": e / total for g, e in energies.items()}

@@ -1,0 +1,48 @@
+"""Cable-stayed pedestrian bridge (SPEC section 6): OpenSeesPy model, modes, measured data.
+
+``make_model(cable_elements=4, fast=True, ...)`` builds the model, ``measured(case)`` gives
+the measured modes; the structure is registered as ``bridge`` in
+:mod:`framework.models.registry`. Model notes: docs/bridge.md.
+
+Modules, one job each (imports only go down this list, no cycles):
+
+- :mod:`.geometry`: dimensions, sections, bearings, masses, node numbering, sensor DOFs,
+  :class:`~.geometry.BridgeInfo`;
+- :mod:`.parameters`: the six updating parameters (ratios, bounds 0.6-1.3);
+- :mod:`.data`: published values (measured and design-model frequencies, damping, labels);
+- :mod:`.build`: the OpenSeesPy build, its gravity analysis and cable tensions;
+- :mod:`.modes`: mode classification by kinetic energy, deck-mode selection, pairing by type;
+- :mod:`.fast`: the fast eigen path (OpenSees gravity, numpy/scipy eigen solution);
+- :mod:`.model`: :func:`make_model`, plain or fast path;
+- :mod:`.reference`: :func:`measured`, with reference shapes from the initial model.
+"""
+
+from framework.models.bridge.data import (
+    DESIGN_MODEL_HZ,
+    MEASURED_DAMPING,
+    MEASURED_HZ,
+    MEASURED_LABELS,
+    MEASURED_PEAK_HZ,
+    MEASURED_TYPES,
+)
+from framework.models.bridge.geometry import DESIGN_TENSION_N, deck_mass_per_m
+from framework.models.bridge.model import make_model
+from framework.models.bridge.modes import pair_by_type
+from framework.models.bridge.parameters import PARAMETER_NAMES, bridge_parameters
+from framework.models.bridge.reference import measured
+
+__all__ = [
+    "DESIGN_MODEL_HZ",
+    "DESIGN_TENSION_N",
+    "MEASURED_DAMPING",
+    "MEASURED_HZ",
+    "MEASURED_LABELS",
+    "MEASURED_PEAK_HZ",
+    "MEASURED_TYPES",
+    "PARAMETER_NAMES",
+    "bridge_parameters",
+    "deck_mass_per_m",
+    "make_model",
+    "measured",
+    "pair_by_type",
+]
