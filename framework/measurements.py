@@ -364,8 +364,8 @@ def from_dict(data: dict, source: str = "<dict>") -> MeasuredModes:
         raise InputError(f"{source}: 'units' must be a mapping like {_UNITS}, got {_show(units)}")
     for key, value in units.items():
         if key not in _UNITS:
-            raise InputError(f"{source}: units.{key}: unknown quantity; known: {sorted(_UNITS)}")
-        if value != _UNITS[key]:
+            raise InputError(f"{source}: units: unknown quantity {_show(key)}; known: {sorted(_UNITS)}")
+        if not isinstance(value, str) or value != _UNITS[key]:
             raise InputError(
                 f"{source}: units.{key}: unsupported unit {_show(value)}; data files use {_UNITS[key]!r} (SI)"
             )
@@ -434,6 +434,8 @@ def from_dict(data: dict, source: str = "<dict>") -> MeasuredModes:
 def load(path: str | Path) -> MeasuredModes:
     """Load measured modes from a .yaml/.yml or .csv file (format in the module docstring)."""
     path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder, not a measured-modes file")
     suffix = path.suffix.lower()
     if suffix in (".yaml", ".yml"):
         data = textio.read_yaml_file(path, what="measured-modes", max_bytes=textio.DATA_MAX_BYTES)

@@ -454,7 +454,7 @@ def read_csv_table(
                 continue
             if header is None:
                 header = [f.strip() for f in fields]
-                _check_header(header, source)
+                _check_header(header, f"{source}: line {reader.line_num}")
                 continue
             if len(fields) != len(header):
                 more = "more" if len(fields) > len(header) else "fewer"
@@ -471,18 +471,17 @@ def read_csv_table(
     return header, rows
 
 
-def _check_header(header: list[str], source: str) -> None:
-    if len(header) == 1:
-        for sep, name in ((";", "';'"), ("\t", "tabs")):
-            if sep in header[0]:
-                raise InputError(
-                    f"{source}: line 1: columns separated by {name}; use ',' between columns and '.' in numbers"
-                )
+def _check_header(header: list[str], where: str) -> None:
+    for sep, name in ((";", "';'"), ("\t", "tabs")):
+        if any(sep in h for h in header):
+            raise InputError(
+                f"{where}: columns separated by {name}? use ',' between columns and '.' in numbers"
+            )
     if any(not h for h in header):
-        raise InputError(f"{source}: line 1: empty column name in {header}")
+        raise InputError(f"{where}: empty column name in {header}")
     dup = sorted({h for h in header if header.count(h) > 1})
     if dup:
-        raise InputError(f"{source}: line 1: repeated column(s) {dup}")
+        raise InputError(f"{where}: repeated column(s) {dup}")
 
 
 def parse_number(text: str, where: str) -> float:
