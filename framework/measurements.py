@@ -272,20 +272,22 @@ class MeasuredModes:
         return self.select([n - 1 for n in self._positions(numbers, 1, where)])
 
     def _positions(self, values, first: int, where: str) -> list[int]:
-        m = self.n_modes
+        """Checked positions: integers in first..n_modes-1+first, each once (first = 0 or 1)."""
+        m, last = self.n_modes, self.n_modes - 1 + first
+        noun, nouns = ("mode", "mode numbers") if first == 1 else ("index", "mode indices")
         if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, (Sequence, np.ndarray)):
-            raise InputError(f"{where}: expected a list of mode numbers, got {_kind(values)}: {_show(values)}")
+            raise InputError(f"{where}: expected a list of {nouns}, got {_kind(values)}: {_show(values)}")
         out: list[int] = []
         for v in values:
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
-                raise InputError(f"{where}: {_show(v)} is not a mode number (an integer {first} to {m - 1 + first})")
-            if not first <= v <= m - 1 + first:
+                raise InputError(f"{where}: {_show(v)} is not a {noun} (an integer {first} to {last})")
+            if not first <= v <= last:
                 raise InputError(
-                    f"{where}: mode {int(v)} does not exist: the data have {m} modes, "
-                    f"numbered {first} to {m - 1 + first}"
+                    f"{where}: {noun} {int(v)} does not exist: the data have {m} modes, "
+                    f"{'numbered' if first else 'indices'} {first} to {last}"
                 )
             if int(v) in out:
-                raise InputError(f"{where}: mode {int(v)} is selected twice")
+                raise InputError(f"{where}: {noun} {int(v)} is selected twice")
             out.append(int(v))
         if not out:
             raise InputError(f"{where}: no modes selected")

@@ -428,7 +428,7 @@ class _Dumper(yaml.SafeDumper):
 def dump_yaml(data: Any) -> str:
     """YAML text of plain data (dict, list, str, int, float, bool, None) that :func:`read_yaml_text`
     and other YAML readers read back identically; keys keep their order."""
-    return yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True)
+    return yaml.dump(data, Dumper=_Dumper, sort_keys=False)  # allow_unicode=True would write U+0085, U+2028 raw
 
 
 # ---- CSV ------------------------------------------------------------------------------------
@@ -437,7 +437,7 @@ def read_csv_table(
 ) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """Header and rows of a comma-separated UTF-8 file: ``(columns, [(line number, fields), ...])``.
 
-    Strict: the delimiter is ``,`` (a header split by ``;`` or tabs is refused), every row has
+    Strict: the delimiter is ``,`` (a header of one column holding ``;`` or a tab is refused), every row has
     exactly as many fields as the header (a decimal comma gives one field too many), column
     names are non-empty and distinct, quoting follows RFC 4180. Blank lines are skipped.
     Fields are returned as text; read numbers with :func:`parse_number`.
@@ -473,7 +473,7 @@ def read_csv_table(
 
 def _check_header(header: list[str], where: str) -> None:
     for sep, name in ((";", "';'"), ("\t", "tabs")):
-        if any(sep in h for h in header):
+        if len(header) == 1 and sep in header[0]:
             raise InputError(
                 f"{where}: columns separated by {name}? use ',' between columns and '.' in numbers"
             )
