@@ -1,8 +1,8 @@
 """Reading user text: YAML configs and data files, CSV tables and ``--set`` values, strictly.
 
-Every file or text the framework reads from a user goes through this module, so that each
-problem becomes one ``InputError("<file>: <problem>")`` line instead of a traceback or,
-worse, a silent misreading:
+User files and text (configs, measured-modes files, ``--set`` values) are read here, so
+that each problem becomes one ``InputError("<file>: <problem>")`` line instead of a
+traceback or, worse, a silent misreading:
 
 - files: missing, a folder, unreadable, larger than a limit (checked before parsing), empty,
   not UTF-8 (a UTF-8 byte-order mark is accepted);
@@ -23,11 +23,12 @@ number literal outside the double range (``1e400``) or one that rounds to zero
 the data layer's job to refuse them where a finite number is needed. Booleans are not
 numbers here either: the schema gets ``True``, not ``1``.
 
-Why a custom PyYAML loader: PyYAML (a dependency already) keeps the last of duplicate keys,
-expands aliases without limit, recurses without a depth limit (RecursionError at ~1000
-levels) and resolves YAML 1.1 scalars. No maintained PyYAML add-on on PyPI does duplicate
-keys plus alias and depth limits. ruamel.yaml rejects duplicate keys and speaks YAML 1.2,
-but it has no limit on alias expansion or depth either and would be a second YAML library;
+Why a custom PyYAML loader: PyYAML (a dependency already) keeps the last of duplicate keys
+(a long-open PyYAML issue), expands aliases without limit, recurses without a depth limit
+(RecursionError at ~1000 levels) and resolves YAML 1.1 scalars. We found no maintained
+PyYAML add-on that adds duplicate-key, alias and depth limits together (the usual answer is
+a ``construct_mapping`` override). ruamel.yaml rejects duplicate keys and speaks YAML 1.2,
+but documents no limit on alias expansion or depth and would be a second YAML library;
 strictyaml refuses flow style (``{frequency_hz: 3.58}``, ``[1, 2]``), which the project's
 files use. So the loader below reuses PyYAML's parser (libyaml's when installed) and
 composer, adds the checks on the composed node graph before anything is constructed, and
