@@ -189,9 +189,9 @@ class MeasuredModes:
         src = self.source
         if not isinstance(self.name, str):
             raise InputError(f"{src}: name must be text, got {_show(self.name)}")
-        if not isinstance(self.meta, Mapping):
+        if self.meta is not None and not isinstance(self.meta, Mapping):
             raise InputError(f"{src}: meta must be a mapping, got {_kind(self.meta)}")
-        object.__setattr__(self, "meta", dict(self.meta))
+        object.__setattr__(self, "meta", dict(self.meta or {}))
         f = _as_float_array(self.frequencies_hz, f"{src}: frequencies_hz")
         if f.ndim != 1 or f.size == 0:
             raise InputError(f"{src}: frequencies_hz must be a non-empty list, got {_show(self.frequencies_hz)}")
@@ -207,7 +207,7 @@ class MeasuredModes:
                 if not np.any(shapes[:, j]):
                     raise InputError(f"{src}: mode {j + 1} shape is all zeros")
             object.__setattr__(self, "shapes", shapes)
-        labels = self.labels if len(self.labels) else tuple(f"mode {i + 1}" for i in range(m))
+        labels = self.labels if self.labels is not None and len(self.labels) else [f"mode {i + 1}" for i in range(m)]
         labels = _texts(labels, f"{src}: labels", "mode labels")
         if len(labels) != m:
             raise InputError(f"{src}: {len(labels)} labels for {m} modes")
