@@ -1,52 +1,166 @@
 """Measured modal data: natural frequencies, mode shapes at named DOFs, damping, weights.
 
-File formats (both read and written here):
+File formats (both read and written here; reading goes through :mod:`framework.textio`,
+so duplicate keys, non-UTF-8 text, oversized files and YAML bombs are errors):
 
 YAML ::
 
     name: lab_frame            # optional
     units: {frequency: Hz}     # optional; only SI (Hz, damping ratio, m) is accepted
-    dofs: [y, x, torsion]      # measured DOF labels, in the row order of the shapes
+    dofs: [y, x, torsion]      # measured DOF labels (text), in the row order of the shapes
     modes:
-      - label: 1st y           # optional
-        frequency_hz: 3.58     # required, > 0
-        damping_ratio: 0.0121  # optional, fraction of critical
-        shape: [1.0, 0.004, -0.01]   # optional, one value per DOF
-        frequency_std_hz: 0.01       # optional, standard deviation of the frequency
-        shape_std: [0.01, 0.01, 0.01]  # optional
-        weight_frequency: 1.0        # optional, default 1
-        weight_shape: 1.0            # optional, default 1
+      - label: 1st y           # optional text, unique; a number label must be quoted: '1'
+        frequency_hz: 3.58     # required, finite, > 0
+        damping_ratio: 0.0121  # optional, fraction of critical, 0 <= zeta < 1
+        shape: [1.0, 0.004, -0.01]   # optional, one value per DOF, not all zero
+        frequency_std_hz: 0.01       # optional, standard deviation of the frequency, >= 0
+        shape_std: [0.01, 0.01, 0.01]  # optional, >= 0 (0 at a normalising component)
+        weight_frequency: 1.0        # optional, default 1, >= 0
+        weight_shape: 1.0            # optional, default 1, >= 0
 
-CSV: one row per mode, columns ``frequency_hz`` (required), ``label``, ``damping_ratio``,
-``frequency_std_hz``, ``weight_frequency``, ``weight_shape`` (optional) and one column
-``shape:<dof>`` per measured DOF (optional; all or none).
+CSV (UTF-8, ``,`` between columns, ``.`` in numbers): one row per mode, columns
+``frequency_hz`` (required), ``label``, ``damping_ratio``, ``frequency_std_hz``,
+``weight_frequency``, ``weight_shape`` (optional), ``mode`` (optional, distinct numbers
+>= 1, informative only: rows are taken in file order) and one column ``shape:<dof>`` per
+measured DOF (optional; all or none). An empty cell is a value not given.
+
+Strict reading (nothing is converted silently): numbers are YAML numbers, never booleans
+(``true`` is not 1) or text (``'3.58'``) and must be finite; a list is required where a
+list is documented (``dofs: "yx"`` is an error, not ['y', 'x']); labels are text, distinct;
+every value error names the file, the field and the value.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
+from collections import Counter
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from framework import textio
 from framework.errors import InputError
 
+_NUMBER_TYPES = (int, float, np.integer, np.floating)
 
-def _as_float_array(values, where: str, expected_len: int | None = None) -> np.ndarray:
+
+def _show(value, limit: int = 60) -> str:
+    """repr of a value for a message, shortened."""
+    text = repr(value)
+    if isinstance(value, int) and len(text) > limit:
+        return f"{text[:12]}...({len(text)} digits)"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _kind(value) -> str:
+    if isinstance(value, Mapping):
+        return "a mapping"
+    if isinstance(value, (bool, np.bool_)):
+        return "a boolean"
+    if isinstance(value, str):
+        return "a text"
+    if isinstance(value, (list, tuple)):
+        return "a list"
+    return type(value).__name__
+
+
+def _number(value, where: str) -> float:
+    """A real number as float: bool, text, None and out-of-range integers are InputErrors."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, _NUMBER_TYPES):
+        raise InputError(f"{where}: not a number: {_show(value)}")
     try:
-        arr = np.asarray(values, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{where}: not numeric: {values!r}") from exc
-    if expected_len is not None and arr.shape != (expected_len,):
-        raise InputError(
-            f"{where}: has {arr.size} values, expected {expected_len} (one per DOF); got {values!r}"
-        )
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        raise InputError(f"{where}: non-finite value {arr[bad][0]!r} in {values!r}")
+        return float(value)
+    except OverflowError:
+        raise InputError(f"{where}: {_show(value)} is outside the double-precision range") from None
+
+
+#: value rules: name -> (test, wording)
+_RULES = {
+    "positive": (lambda a: a > 0, "a finite positive number"),
+    "nonnegative": (lambda a: a >= 0, "a finite number >= 0"),
+    "ratio": (lambda a: (a >= 0) & (a < 1), "a finite fraction of critical damping in [0, 1)"),
+    "any": (lambda a: np.ones_like(a, dtype=bool), "a finite number"),
+}
+
+
+def _check_rule(arr: np.ndarray, where: str, rule: str) -> None:
+    test, wording = _RULES[rule]
+    finite = np.isfinite(arr)
+    ok = finite & test(np.where(finite, arr, 0.0))
+    if not np.all(ok):
+        bad = arr[~ok][0]
+        raise InputError(f"{where}: must be {wording}, got {_show(float(bad))}")
+
+
+def _check_value(value, where: str, rule: str) -> float:
+    x = _number(value, where)
+    _check_rule(np.array([x]), where, rule)
+    return x
+
+
+def _check_leaves(values, where: str, depth: int = 0) -> None:
+    if isinstance(values, np.ndarray):
+        values = values.tolist()
+    if isinstance(values, (list, tuple)):
+        if depth >= 3:
+            raise InputError(f"{where}: nested too deeply: {_show(values)}")
+        for v in values:
+            _check_leaves(v, where, depth + 1)
+        return
+    if isinstance(values, (complex, np.complexfloating)):
+        raise InputError(f"{where}: must be real (normal modes), got {_show(values)}; make them real first")
+    _number(values, where)
+
+
+def _as_float_array(
+    values, where: str, shape: tuple | None = None, rule: str = "any", each: str = ""
+) -> np.ndarray:
+    """Numbers as a float array of ``shape``; booleans, text, ragged lists and non-finite values
+    are InputErrors (np.asarray alone would turn True into 1.0 and '3.5' into 3.5)."""
+    if isinstance(values, np.ndarray) and values.dtype.kind in "iuf":
+        arr = values.astype(float)
+    elif isinstance(values, np.ndarray) and values.dtype.kind == "c":
+        raise InputError(f"{where}: must be real (normal modes); make them real first")
+    elif isinstance(values, (str, bytes, Mapping)) or not isinstance(values, (list, tuple, np.ndarray)):
+        raise InputError(f"{where}: expected a list of numbers, got {_kind(values)}: {_show(values)}")
+    else:
+        _check_leaves(values, where)
+        try:
+            arr = np.asarray(values, dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            raise InputError(f"{where}: not a regular array of numbers: {_show(values)}") from None
+    if shape is not None and arr.shape != shape:
+        if arr.ndim == 1 and len(shape) == 1:
+            each = f" ({each})" if each else ""
+            raise InputError(f"{where}: has {arr.size} values, expected {shape[0]}{each}; got {_show(values)}")
+        raise InputError(f"{where}: has shape {arr.shape}, expected {shape}")
+    _check_rule(arr.ravel(), where, rule)
     return arr
+
+
+def _not_text(value, where: str) -> str:
+    hint = ""
+    if isinstance(value, _NUMBER_TYPES) and not isinstance(value, (bool, np.bool_)):
+        hint = f"; write it in quotes: '{value}'"
+    return f"{where}: must be text, got {_kind(value)}: {_show(value)}{hint}"
+
+
+def _texts(values, where: str, what: str) -> tuple[str, ...]:
+    """A tuple of distinct non-empty texts (DOF or mode labels)."""
+    if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, (list, tuple, np.ndarray)):
+        raise InputError(f"{where}: must be a list of {what}, got {_kind(values)}: {_show(values)}")
+    out = []
+    for i, v in enumerate(values):
+        if not isinstance(v, str):
+            raise InputError(_not_text(v, f"{where}[{i}]"))
+        if not v.strip():
+            raise InputError(f"{where}[{i}]: must not be empty")
+        out.append(str(v))
+    dup = sorted(v for v, n in Counter(out).items() if n > 1)
+    if dup:
+        raise InputError(f"{where}: duplicate {what} {dup}")
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -73,48 +187,41 @@ class MeasuredModes:
 
     def __post_init__(self) -> None:
         src = self.source
+        if not isinstance(self.name, str):
+            raise InputError(f"{src}: name must be text, got {_show(self.name)}")
+        if self.meta is not None and not isinstance(self.meta, Mapping):
+            raise InputError(f"{src}: meta must be a mapping, got {_kind(self.meta)}")
+        object.__setattr__(self, "meta", dict(self.meta or {}))
         f = _as_float_array(self.frequencies_hz, f"{src}: frequencies_hz")
         if f.ndim != 1 or f.size == 0:
-            raise InputError(f"{src}: frequencies_hz must be a non-empty list, got {self.frequencies_hz!r}")
+            raise InputError(f"{src}: frequencies_hz must be a non-empty list, got {_show(self.frequencies_hz)}")
         for i, v in enumerate(f):
-            if v <= 0:
-                raise InputError(f"{src}: mode {i + 1} frequency_hz must be > 0, got {v!r}")
+            _check_value(v, f"{src}: mode {i + 1} frequency_hz", "positive")
         object.__setattr__(self, "frequencies_hz", f)
         m = f.size
-        dofs = tuple(str(d) for d in self.dofs)
-        dup = sorted({d for d in dofs if dofs.count(d) > 1})
-        if dup:
-            raise InputError(f"{src}: duplicate DOF labels {dup}")
+        dofs = _texts(self.dofs, f"{src}: dofs", "DOF labels")
         object.__setattr__(self, "dofs", dofs)
         if self.shapes is not None:
-            shapes = np.asarray(self.shapes)
-            if np.iscomplexobj(shapes):
-                raise InputError(f"{src}: shapes must be real (normal modes); make them real first")
-            shapes = _as_float_array(shapes, f"{src}: shapes")
-            if shapes.ndim != 2 or shapes.shape != (len(dofs), m):
-                raise InputError(
-                    f"{src}: shapes have shape {shapes.shape}, expected ({len(dofs)} dofs, {m} modes)"
-                )
+            shapes = _as_float_array(self.shapes, f"{src}: shapes", (len(dofs), m))
             for j in range(m):
                 if not np.any(shapes[:, j]):
                     raise InputError(f"{src}: mode {j + 1} shape is all zeros")
             object.__setattr__(self, "shapes", shapes)
-        labels = tuple(self.labels) if self.labels else tuple(f"mode {i + 1}" for i in range(m))
+        labels = self.labels if self.labels is not None and len(self.labels) else [f"mode {i + 1}" for i in range(m)]
+        labels = _texts(labels, f"{src}: labels", "mode labels")
         if len(labels) != m:
             raise InputError(f"{src}: {len(labels)} labels for {m} modes")
         object.__setattr__(self, "labels", labels)
-        for name in ("damping_ratio", "weight_frequency", "weight_shape", "frequency_std_hz"):
+        rules = {"damping_ratio": "ratio", "weight_frequency": "nonnegative", "weight_shape": "nonnegative",
+                 "frequency_std_hz": "nonnegative"}
+        for name, rule in rules.items():
             value = getattr(self, name)
-            if value is None:
-                continue
-            arr = _as_float_array(value, f"{src}: {name}", expected_len=m)
-            if name != "damping_ratio" and np.any(arr < 0):
-                raise InputError(f"{src}: {name} must be >= 0, got {arr.tolist()}")
-            object.__setattr__(self, name, arr)
+            if value is not None:
+                object.__setattr__(self, name, _as_float_array(value, f"{src}: {name}", (m,), rule))
         if self.shape_std is not None:
-            arr = _as_float_array(self.shape_std, f"{src}: shape_std")
-            if arr.shape != (len(dofs), m):
-                raise InputError(f"{src}: shape_std has shape {arr.shape}, expected ({len(dofs)}, {m})")
+            if self.shapes is None:
+                raise InputError(f"{src}: shape_std is given but there are no shapes")
+            arr = _as_float_array(self.shape_std, f"{src}: shape_std", (len(dofs), m), "nonnegative")
             object.__setattr__(self, "shape_std", arr)
 
     # -------------------------------------------------------------------------------
@@ -134,9 +241,14 @@ class MeasuredModes:
     def w_shape(self) -> np.ndarray:
         return np.ones(self.n_modes) if self.weight_shape is None else self.weight_shape
 
-    def select(self, modes: Sequence[int]) -> MeasuredModes:
-        """Keep the given 0-based modes."""
-        idx = list(modes)
+    def select(self, indices: Sequence[int]) -> MeasuredModes:
+        """Keep the modes at the given 0-based positions (in the given order).
+
+        Each index must be an integer in 0..n_modes-1 and appear once: a negative index does
+        not count from the end here. For 1-based mode numbers from a config use
+        :meth:`select_modes`.
+        """
+        idx = self._positions(indices, 0, f"{self.source}: mode indices")
         pick = lambda a: None if a is None else np.asarray(a)[..., idx]  # noqa: E731
         return replace(
             self,
@@ -149,6 +261,37 @@ class MeasuredModes:
             frequency_std_hz=pick(self.frequency_std_hz),
             shape_std=pick(self.shape_std),
         )
+
+    def select_modes(self, numbers: Sequence[int], where: str | None = None) -> MeasuredModes:
+        """Keep the modes numbered ``numbers`` (1-based, as in ``measured.modes: [1, 3]``).
+
+        0, negative, repeated or too large numbers, booleans and non-integers are InputErrors
+        naming ``where`` (default: the data's source), the value and the number of modes.
+        """
+        where = where or f"{self.source}: modes"
+        return self.select([n - 1 for n in self._positions(numbers, 1, where)])
+
+    def _positions(self, values, first: int, where: str) -> list[int]:
+        """Checked positions: integers in first..n_modes-1+first, each once (first = 0 or 1)."""
+        m, last = self.n_modes, self.n_modes - 1 + first
+        noun, nouns = ("mode", "mode numbers") if first == 1 else ("index", "mode indices")
+        if isinstance(values, (str, bytes, Mapping)) or not isinstance(values, (Sequence, np.ndarray)):
+            raise InputError(f"{where}: expected a list of {nouns}, got {_kind(values)}: {_show(values)}")
+        out: list[int] = []
+        for v in values:
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+                raise InputError(f"{where}: {_show(v)} is not a {noun} (an integer {first} to {last})")
+            if not first <= v <= last:
+                raise InputError(
+                    f"{where}: {noun} {int(v)} does not exist: the data have {m} modes, "
+                    f"{'numbered' if first else 'indices'} {first} to {last}"
+                )
+            if int(v) in out:
+                raise InputError(f"{where}: {noun} {int(v)} is selected twice")
+            out.append(int(v))
+        if not out:
+            raise InputError(f"{where}: no modes selected")
+        return out
 
     def to_dict(self) -> dict:
         modes = []
@@ -167,7 +310,23 @@ class MeasuredModes:
             if self.weight_shape is not None:
                 row["weight_shape"] = float(self.weight_shape[j])
             modes.append(row)
-        return {"name": self.name, "dofs": list(self.dofs), "modes": modes}
+        out = {"name": self.name, "dofs": list(self.dofs), "modes": modes}
+        if self.meta:
+            out["meta"] = _plain(self.meta)
+        return out
+
+
+def _plain(value):
+    """Numpy scalars and arrays, tuples and mappings as plain Python data (for YAML)."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
 
 
 # --------------------------------------------------------------------------------------
@@ -182,50 +341,67 @@ _MODE_KEYS = {
     "weight_shape",
 }
 _TOP_KEYS = {"name", "dofs", "modes", "meta", "units"}
+#: numeric per-mode fields and their rule (see _RULES)
+_MODE_NUMBERS = {
+    "frequency_hz": "positive",
+    "damping_ratio": "ratio",
+    "frequency_std_hz": "nonnegative",
+    "weight_frequency": "nonnegative",
+    "weight_shape": "nonnegative",
+}
 #: the only units accepted in data files (SI); anything else is an error, not a guess
 _UNITS = {"frequency": "Hz", "damping": "ratio", "shape": "m"}
 
 
 def from_dict(data: dict, source: str = "<dict>") -> MeasuredModes:
     """Build MeasuredModes from the YAML structure documented in the module docstring."""
-    if not isinstance(data, dict):
-        raise InputError(f"{source}: expected a mapping with 'dofs' and 'modes', got {type(data).__name__}")
-    unknown = sorted(set(data) - _TOP_KEYS)
+    if not isinstance(data, Mapping):
+        raise InputError(f"{source}: expected a mapping with 'dofs' and 'modes', got {_kind(data)}")
+    unknown = sorted(str(k) for k in set(data) - _TOP_KEYS)
     if unknown:
         raise InputError(f"{source}: unknown top-level key(s) {unknown}; allowed: {sorted(_TOP_KEYS)}")
-    units = data.get("units") or {}
-    if not isinstance(units, dict):
-        raise InputError(f"{source}: 'units' must be a mapping like {_UNITS}, got {units!r}")
+    units = data.get("units")
+    units = {} if units is None else units
+    if not isinstance(units, Mapping):
+        raise InputError(f"{source}: 'units' must be a mapping like {_UNITS}, got {_show(units)}")
     for key, value in units.items():
         if key not in _UNITS:
-            raise InputError(f"{source}: units.{key}: unknown quantity; known: {sorted(_UNITS)}")
-        if str(value) != _UNITS[key]:
+            raise InputError(f"{source}: units: unknown quantity {_show(key)}; known: {sorted(_UNITS)}")
+        if not isinstance(value, str) or value != _UNITS[key]:
             raise InputError(
-                f"{source}: units.{key}: unsupported unit {value!r}; data files use {_UNITS[key]!r} (SI)"
+                f"{source}: units.{key}: unsupported unit {_show(value)}; data files use {_UNITS[key]!r} (SI)"
             )
+    name = data.get("name", Path(source).stem)
+    if not isinstance(name, str) or not name.strip():
+        raise InputError(f"{source}: name: must be a non-empty text, got {_show(name)}")
+    meta = data.get("meta")
+    meta = {} if meta is None else meta
+    if not isinstance(meta, Mapping):
+        raise InputError(f"{source}: meta: must be a mapping, got {_kind(meta)}: {_show(meta)}")
     modes = data.get("modes")
     if not isinstance(modes, list) or not modes:
-        raise InputError(f"{source}: 'modes' must be a non-empty list, got {modes!r}")
-    dofs = data.get("dofs") or []
-    if not isinstance(dofs, list):
-        raise InputError(f"{source}: 'dofs' must be a list of labels, got {dofs!r}")
+        raise InputError(f"{source}: 'modes' must be a non-empty list, got {_show(modes)}")
+    dofs = data.get("dofs")
+    dofs = _texts([] if dofs is None else dofs, f"{source}: dofs", "DOF labels")
     cols: dict[str, list] = {k: [] for k in _MODE_KEYS}
     for j, mode in enumerate(modes):
         where = f"{source}: modes[{j}]"
-        if not isinstance(mode, dict):
-            raise InputError(f"{where}: expected a mapping, got {mode!r}")
-        bad = sorted(set(mode) - _MODE_KEYS)
+        if not isinstance(mode, Mapping):
+            raise InputError(f"{where}: expected a mapping, got {_kind(mode)}: {_show(mode)}")
+        bad = sorted(str(k) for k in set(mode) - _MODE_KEYS)
         if bad:
             raise InputError(f"{where}: unknown key(s) {bad}; allowed: {sorted(_MODE_KEYS)}")
-        if "frequency_hz" not in mode:
+        if mode.get("frequency_hz") is None:
             raise InputError(f"{where}: 'frequency_hz' is required")
-        fval = mode["frequency_hz"]
-        if isinstance(fval, bool) or not isinstance(fval, (int, float)):
-            raise InputError(f"{where}.frequency_hz: not a number: {fval!r}")
-        if not math.isfinite(fval) or fval <= 0:
-            raise InputError(f"{where}.frequency_hz: must be a finite positive number, got {fval!r}")
-        if "shape" in mode:
-            _as_float_array(mode["shape"], f"{where}.shape", expected_len=len(dofs))
+        label = mode.get("label")
+        if label is not None and not isinstance(label, str):
+            raise InputError(_not_text(label, f"{where}.label"))
+        for key, rule in _MODE_NUMBERS.items():
+            if mode.get(key) is not None:
+                _check_value(mode[key], f"{where}.{key}", rule)
+        for key, rule in (("shape", "any"), ("shape_std", "nonnegative")):
+            if mode.get(key) is not None:
+                _as_float_array(mode[key], f"{where}.{key}", (len(dofs),), rule, each="one per DOF")
         for k in _MODE_KEYS:
             cols[k].append(mode.get(k))
 
@@ -237,13 +413,13 @@ def from_dict(data: dict, source: str = "<dict>") -> MeasuredModes:
         if not all(present):
             missing = [i for i, p in enumerate(present) if not p]
             raise InputError(f"{source}: '{key}' given for some modes but missing for modes {missing}")
-        return values
+        return [float(v) for v in values] if key in _MODE_NUMBERS else values
 
     shapes = column("shape")
     shape_std = column("shape_std")
     return MeasuredModes(
-        frequencies_hz=np.array(cols["frequency_hz"], dtype=float),
-        dofs=tuple(dofs),
+        frequencies_hz=np.array(column("frequency_hz"), dtype=float),
+        dofs=dofs,
         shapes=None if shapes is None else np.array(shapes, dtype=float).T,
         damping_ratio=column("damping_ratio"),
         labels=tuple(v if v is not None else f"mode {i + 1}" for i, v in enumerate(cols["label"])),
@@ -251,87 +427,78 @@ def from_dict(data: dict, source: str = "<dict>") -> MeasuredModes:
         weight_shape=column("weight_shape"),
         frequency_std_hz=column("frequency_std_hz"),
         shape_std=None if shape_std is None else np.array(shape_std, dtype=float).T,
-        name=str(data.get("name", Path(source).stem)),
+        name=name,
         source=source,
-        meta=dict(data.get("meta") or {}),
+        meta=dict(meta),
     )
 
 
 def load(path: str | Path) -> MeasuredModes:
     """Load measured modes from a .yaml/.yml or .csv file (format in the module docstring)."""
     path = Path(path)
-    if not path.exists():
-        raise InputError(f"measured-modes file not found: {path}")
-    if path.stat().st_size == 0:
-        raise InputError(f"{path}: file is empty")
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder, not a measured-modes file")
     suffix = path.suffix.lower()
     if suffix in (".yaml", ".yml"):
-        import yaml
-
-        try:
-            data = yaml.safe_load(path.read_text())
-        except yaml.YAMLError as exc:
-            raise InputError(f"{path}: not valid YAML: {exc}") from exc
+        data = textio.read_yaml_file(path, what="measured-modes", max_bytes=textio.DATA_MAX_BYTES)
         return from_dict(data, source=str(path))
     if suffix == ".csv":
         return _load_csv(path)
     raise InputError(f"{path}: unsupported measured-modes format {suffix!r} (use .yaml or .csv)")
 
 
-def _load_csv(path: Path) -> MeasuredModes:
-    import pandas as pd
+_CSV_NUMBERS = ("frequency_hz", "damping_ratio", "frequency_std_hz", "weight_frequency", "weight_shape")
+_CSV_COLUMNS = {"mode", "label", *_CSV_NUMBERS}
 
-    try:
-        df = pd.read_csv(path)
-    except Exception as exc:  # pandas raises several types for malformed files
-        raise InputError(f"{path}: cannot read CSV: {exc}") from exc
-    if "frequency_hz" not in df.columns:
-        raise InputError(f"{path}: column 'frequency_hz' is required; columns are {list(df.columns)}")
-    allowed = {
-        "mode",
-        "label",
-        "frequency_hz",
-        "damping_ratio",
-        "frequency_std_hz",
-        "weight_frequency",
-        "weight_shape",
-    }
-    shape_cols = [c for c in df.columns if str(c).startswith("shape:")]
-    unknown = sorted(set(df.columns) - allowed - set(shape_cols))
+
+def _load_csv(path: Path) -> MeasuredModes:
+    """Read the CSV format of the module docstring with :func:`framework.textio.read_csv_table`."""
+    header, rows = textio.read_csv_table(path, what="measured-modes", max_bytes=textio.DATA_MAX_BYTES)
+    src = str(path)
+    if "frequency_hz" not in header:
+        raise InputError(f"{src}: column 'frequency_hz' is required; columns are {header}")
+    shape_cols = [c for c in header if c.startswith("shape:")]
+    unknown = sorted(set(header) - _CSV_COLUMNS - set(shape_cols))
     if unknown:
-        raise InputError(f"{path}: unknown column(s) {unknown}")
-    modes = []
-    for i, row in df.iterrows():
+        raise InputError(f"{src}: unknown column(s) {unknown}; allowed: {sorted(_CSV_COLUMNS)} and shape:<dof>")
+    if any(c == "shape:" for c in shape_cols):
+        raise InputError(f"{src}: column 'shape:' names no DOF; write shape:<dof>")
+    if not rows:
+        raise InputError(f"{src}: no modes (only a header line)")
+    pos = {c: i for i, c in enumerate(header)}
+    modes, numbers = [], []
+    for line, fields in rows:
+        cell = {c: fields[i].strip() for c, i in pos.items()}
+        at = f"{src}: line {line}"
         mode: dict = {}
-        for c in (
-            "label",
-            "frequency_hz",
-            "damping_ratio",
-            "frequency_std_hz",
-            "weight_frequency",
-            "weight_shape",
-        ):
-            if c in df.columns and not (c != "frequency_hz" and pd.isna(row[c])):
-                value = row[c]
-                if c != "label":
-                    try:
-                        value = float(value)
-                    except (TypeError, ValueError) as exc:
-                        raise InputError(f"{path}: row {i + 1} column {c!r}: not numeric: {value!r}") from exc
-                mode[c] = value
-        if shape_cols:
-            mode["shape"] = [row[c] for c in shape_cols]
+        if cell.get("label"):
+            mode["label"] = cell["label"]
+        if cell.get("mode"):
+            number = textio.parse_number(cell["mode"], f"{at}, column 'mode'")
+            if number != int(number) or number < 1 or number in numbers:
+                raise InputError(f"{at}, column 'mode': must be a distinct mode number >= 1, got {cell['mode']!r}")
+            numbers.append(number)
+        if not cell["frequency_hz"]:
+            raise InputError(f"{at}, column 'frequency_hz': is empty; every mode needs a frequency")
+        for c in _CSV_NUMBERS:
+            if cell.get(c):
+                where = f"{at}, column {c!r}"
+                mode[c] = _check_value(textio.parse_number(cell[c], where), where, _MODE_NUMBERS[c])
+        given = [c for c in shape_cols if cell[c]]
+        if given and len(given) != len(shape_cols):
+            empty = [c for c in shape_cols if not cell[c]]
+            raise InputError(f"{at}: shape cells {empty} are empty; give all shape values of a mode or none")
+        if given:
+            mode["shape"] = [textio.parse_number(cell[c], f"{at}, column {c!r}") for c in shape_cols]
         modes.append(mode)
     data = {"name": path.stem, "dofs": [c.split(":", 1)[1] for c in shape_cols], "modes": modes}
-    return from_dict(data, source=str(path))
+    return from_dict(data, source=src)
 
 
 def save(modes: MeasuredModes, path: str | Path) -> Path:
-    """Write measured modes as YAML (atomically)."""
-    import yaml
-
+    """Write measured modes as YAML (atomically); :func:`load` reads back the same data."""
     from framework.io import atomic_write_text
 
     path = Path(path)
-    atomic_write_text(path, yaml.safe_dump(modes.to_dict(), sort_keys=False))
+    atomic_write_text(path, textio.dump_yaml(modes.to_dict()))
     return path
