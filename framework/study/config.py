@@ -23,15 +23,13 @@ dotted paths: ``--set algorithms.pso.settings.swarm_size=40``.
 
 from __future__ import annotations
 
-import copy
 from pathlib import Path
 from typing import Any
-
-import yaml
 
 from framework.errors import InputError
 from framework.study.kinds import get_kind
 from framework.study.schema import StudyHeader, format_error, validated
+from framework.textio import parse_override_value, read_yaml_file
 
 __all__ = ["StudyConfig", "format_error", "load", "parse_value", "read_with_overrides", "set_path", "validate"]
 
@@ -39,12 +37,9 @@ __all__ = ["StudyConfig", "format_error", "load", "parse_value", "read_with_over
 StudyConfig = StudyHeader
 
 
-def parse_value(text: str) -> Any:
+def parse_value(text: str, source: str = "--set") -> Any:
     """A --set value: YAML scalar/list syntax (``40``, ``1e-6``, ``[5, 10]``, ``true``)."""
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError:
-        return text
+    return parse_override_value(text, source)
 
 
 def set_path(data: dict, dotted: str, value: Any) -> None:
@@ -60,30 +55,14 @@ def set_path(data: dict, dotted: str, value: Any) -> None:
     node[keys[-1]] = value
 
 
-def read_yaml(path: Path, what: str = "config") -> Any:
-    """The YAML document of ``path``; InputError naming the file for anything unreadable."""
-    if not path.exists():
-        raise InputError(f"{what} file not found: {path}")
-    try:
-        return yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise InputError(f"{path}: not valid YAML: {exc}") from None
-
-
 def read_with_overrides(path: str | Path, overrides: list[str] | None = None, what: str = "config") -> dict:
-    """Read a YAML mapping and apply ``key.path=value`` overrides (errors name the file)."""
-    path = Path(path)
-    data = read_yaml(path, what)
-    if data is None:
-        raise InputError(f"{path}: {what} file is empty")
-    if not isinstance(data, dict):
-        raise InputError(f"{path}: a {what} must be a mapping, got {type(data).__name__}")
-    data = copy.deepcopy(data)
+    """Read a YAML mapping strictly (:mod:`framework.textio`) and apply ``key.path=value`` overrides."""
+    data = read_yaml_file(Path(path), what=what)
     for item in overrides or []:
         if "=" not in item:
             raise InputError(f"--set {item!r}: expected KEY.PATH=VALUE")
         key, value = item.split("=", 1)
-        set_path(data, key.strip(), parse_value(value))
+        set_path(data, key.strip(), parse_value(value, source=f"--set {key.strip()}"))
     return data
 
 

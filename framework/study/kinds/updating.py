@@ -27,8 +27,8 @@ import numpy as np
 from pydantic import AfterValidator, ConfigDict, Field, StrictInt, ValidationError, field_validator, model_validator
 
 from framework.errors import InputError, ModelEvaluationError
+from framework.exchange import load_measured
 from framework.measurements import MeasuredModes
-from framework.measurements import load as load_measured
 from framework.models.registry import builtin_measured, is_reference, make_structure
 from framework.objectives import ObjectiveSpec, RatioConstraint
 from framework.optimizers import OPTIMIZERS, Budget, run_optimizer, settings_model
@@ -56,6 +56,8 @@ class MeasuredConfig(Strict):
     builtin: str | None = None
     case: str = "base"
     file: str | None = None
+    #: for a UFF file (.unv/.uff): the mapping file from test node + direction to model DOF
+    mapping: str | None = None
     #: 1-based subset of the measured modes to use
     modes: list[StrictInt] | None = None
 
@@ -63,6 +65,8 @@ class MeasuredConfig(Strict):
     def _one_source(self):
         if (self.builtin is None) == (self.file is None):
             raise ValueError("give exactly one of 'builtin' or 'file'")
+        if self.mapping is not None and self.file is None:
+            raise ValueError("'mapping' goes with a UFF 'file'")
         if self.modes is not None:
             if not self.modes:
                 raise ValueError("modes: give at least one mode number, or leave it out for all")
@@ -208,16 +212,19 @@ def check(cfg: Config, source: str, base_dir: Path | None = None) -> None:
         (f"validation[{i}].measured.file", v.measured) for i, v in enumerate(cfg.validation)
     ]
     for field_name, measured in files:
-        if measured.file is None:
-            continue
-        path = Path(measured.file)
-        if not path.is_absolute() and not path.exists() and base_dir is not None and (base_dir / path).exists():
-            path = base_dir / path
-        if not path.exists():
-            raise InputError(f"{source}: {field_name}: file not found: {measured.file}")
-        if path.is_dir():
-            raise InputError(f"{source}: {field_name}: is a folder, not a data file: {measured.file}")
-        measured.file = str(path)
+        for attr in ("file", "mapping"):
+            given = getattr(measured, attr)
+            if given is None:
+                continue
+            where = field_name.removesuffix(".file") + f".{attr}"
+            path = Path(given)
+            if not path.is_absolute() and not path.exists() and base_dir is not None and (base_dir / path).exists():
+                path = base_dir / path
+            if not path.exists():
+                raise InputError(f"{source}: {where}: file not found: {given}")
+            if path.is_dir():
+                raise InputError(f"{source}: {where}: is a folder, not a data file: {given}")
+            setattr(measured, attr, str(path))
 
 
 # ---- plan --------------------------------------------------------------------------------
@@ -249,24 +256,27 @@ def identity(task: dict) -> dict:
 
 
 def _measured_identity(measured: dict) -> dict:
-    if not measured.get("file"):
-        return measured
-    try:
-        digest = hashlib.sha256(Path(measured["file"]).read_bytes()).hexdigest()
-    except OSError:
-        digest = f"unreadable:{measured['file']}"
-    return {**{k: v for k, v in measured.items() if k != "file"}, "file_sha256": digest}
+    out = dict(measured)
+    for attr in ("file", "mapping"):
+        if out.get(attr):
+            try:
+                out[f"{attr}_sha256"] = hashlib.sha256(Path(out[attr]).read_bytes()).hexdigest()
+            except OSError:
+                out[f"{attr}_sha256"] = f"unreadable:{out[attr]}"
+        out.pop(attr, None)
+    return out
 
 
 # ---- problem -----------------------------------------------------------------------------
 def measured_from(cfg: dict) -> MeasuredModes:
-    m = load_measured(cfg["file"]) if cfg.get("file") else builtin_measured(cfg["builtin"], cfg.get("case", "base"))
+    """Measured modes of a ``measured`` section: a built-in data set or a file (YAML, CSV, or
+    UFF with a mapping file), optionally a 1-based subset of its modes."""
+    if cfg.get("file"):
+        m = load_measured(cfg["file"], cfg.get("mapping"))
+    else:
+        m = builtin_measured(cfg["builtin"], cfg.get("case", "base"))
     if cfg.get("modes"):
-        too_high = [i for i in cfg["modes"] if i > m.n_modes]
-        if too_high:
-            raise InputError(f"{m.source}: measured.modes: mode(s) {too_high} do not exist; the data have "
-                             f"{m.n_modes} modes")
-        m = m.select([i - 1 for i in cfg["modes"]])
+        m = m.select_modes(cfg["modes"], where=f"{m.source}: measured.modes")
     return m
 
 
