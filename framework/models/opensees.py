@@ -8,6 +8,10 @@ eigenproblem K phi = omega^2 M phi and reads the eigenvectors at the measured DO
 (f = omega / 2 pi). Every built-in OpenSees structure of the framework uses this path.
 
 The build function must be importable at module level (for process and Dask workers).
+A build that crashes the process (a segfault in native code, an abort after a NaN reached
+OpenSees) or hangs can only be contained by evaluating in an isolated worker
+(:mod:`framework.isolation`); exceptions and ``sys.exit()`` in the build become recorded
+failures ("build_failed", "model_exit") in any process.
 """
 
 from __future__ import annotations
@@ -28,6 +32,10 @@ log = logging.getLogger(__name__)
 
 #: OpenSees direction numbers of a 3D node with 6 DOFs.
 DIRECTIONS = {"ux": 1, "uy": 2, "uz": 3, "rx": 4, "ry": 5, "rz": 6}
+
+#: OpenSees' full generalized LAPACK solver reports an eigenvalue it cannot determine (e.g.
+#: after a NaN stiffness reached the domain) as the largest double, not as inf or NaN.
+UNDETERMINED_EIGENVALUE = float(np.finfo(float).max)
 
 
 def ops_module():
@@ -117,6 +125,8 @@ class OpenSeesModel:
                 info = self.build(values)
             except ModelEvaluationError:
                 raise
+            except SystemExit as exc:  # sys.exit() in a build must not end the study
+                raise ModelEvaluationError("model_exit", f"the build function called sys.exit({exc.code!r})") from exc
             except Exception as exc:  # a user's build function can raise anything
                 raise ModelEvaluationError("build_failed", f"{type(exc).__name__}: {exc}") from exc
             if self.gravity is not None:
@@ -162,8 +172,8 @@ def eigen(ops, n_modes: int, solver: str = "-genBandArpack") -> np.ndarray:
     values = np.atleast_1d(np.asarray(values, dtype=float))
     if values.size < n_modes:
         raise ModelEvaluationError("too_few_modes", f"got {values.size} of {n_modes} modes")
-    if not np.all(np.isfinite(values)):
-        raise ModelEvaluationError("eigen_failed", f"non-finite eigenvalues {values.tolist()}")
+    if not np.all(np.isfinite(values)) or np.any(np.abs(values) >= UNDETERMINED_EIGENVALUE):
+        raise ModelEvaluationError("eigen_failed", f"non-finite or undetermined eigenvalues {values.tolist()}")
     if np.any(values < -1e-6 * max(1.0, float(np.max(np.abs(values))))):
         raise ModelEvaluationError("indefinite_matrix", f"negative eigenvalue {values.min():.4g}")
     return values
