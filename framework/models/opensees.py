@@ -16,6 +16,7 @@ failures ("build_failed", "model_exit") in any process.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 from collections.abc import Callable, Mapping
@@ -122,7 +123,8 @@ class OpenSeesModel:
         ops.wipe()
         try:
             try:
-                info = self.build(values)
+                with finite_arguments(ops):
+                    info = self.build(values)
             except ModelEvaluationError:
                 raise
             except SystemExit as exc:  # sys.exit() in a build must not end the study
@@ -144,6 +146,68 @@ class OpenSeesModel:
             return result
         finally:
             ops.wipe()
+
+
+_checked_commands: dict[str, Callable] = {}
+_guard_depth = 0
+
+
+def _non_finite(value) -> bool:
+    if isinstance(value, float | np.floating):
+        return not math.isfinite(value)
+    if isinstance(value, list | tuple | np.ndarray):
+        return any(_non_finite(v) for v in np.asarray(value, dtype=object).ravel())
+    return False
+
+
+def _checking(name: str, command: Callable) -> Callable:
+    def checked(*args):
+        for value in args:
+            kind = type(value)
+            if kind is float:  # the common case first: NaN fails both comparisons
+                if -math.inf < value < math.inf:
+                    continue
+            elif kind is int or kind is str or not _non_finite(value):
+                continue
+            raise ModelEvaluationError("non_finite_input", f"ops.{name} got {value!r} in {args!r}")
+        return command(*args)
+
+    checked.__name__ = checked.__qualname__ = name
+    checked.__doc__ = command.__doc__
+    return checked
+
+
+@contextlib.contextmanager
+def finite_arguments(ops):
+    """Within the block every command of the ``ops`` module rejects NaN and infinite numbers
+    with ModelEvaluationError("non_finite_input").
+
+    OpenSees does not reject them: given a NaN stiffness, its full LAPACK eigen solver reports
+    undetermined eigenvalues and leaves a corrupted heap that aborts the process at once or at
+    a later, valid evaluation. The module's commands are swapped for checking wrappers while a
+    build function runs, so builds calling ``ops.command(...)`` are covered; commands imported
+    by name (``from openseespy.opensees import node``) are not: evaluate such models in an
+    isolated worker (:mod:`framework.isolation`).
+    """
+    global _guard_depth
+    if _guard_depth:  # already guarded (a build inside a build)
+        yield
+        return
+    if not _checked_commands:
+        for name in dir(ops):
+            command = getattr(ops, name)
+            if not name.startswith("_") and type(command).__name__ == "builtin_function_or_method":
+                _checked_commands[name] = _checking(name, command)
+    originals = {name: getattr(ops, name) for name in _checked_commands}
+    for name, checked in _checked_commands.items():
+        setattr(ops, name, checked)
+    _guard_depth += 1
+    try:
+        yield
+    finally:
+        _guard_depth -= 1
+        for name, command in originals.items():
+            setattr(ops, name, command)
 
 
 def run_static(ops, options: GravityAnalysis) -> None:
