@@ -29,6 +29,7 @@ In a config::
 
 from __future__ import annotations
 
+import faulthandler
 import os
 import signal
 import sys
@@ -103,6 +104,7 @@ def build(values):
     if region == "exit":
         sys.exit(3)
     if region == "segfault":
+        faulthandler.disable()  # no traceback dump on stderr for this deliberate crash
         os.kill(os.getpid(), signal.SIGSEGV)
         time.sleep(10.0)  # the signal is delivered at once; never reached
     if region == "hang":
