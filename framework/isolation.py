@@ -209,7 +209,7 @@ class _Worker:
                 self.conn.close()
                 _run_child(child, parent_pid)
             self.pid = pid
-        else:  # pragma: no cover - platforms without fork
+        else:  # platforms without fork
             self._process = mp.get_context("spawn").Process(target=_serve, args=(child, parent_pid), daemon=True)
             self._process.start()
             self.pid = self._process.pid
@@ -219,7 +219,7 @@ class _Worker:
         """True when the process has ended (it is then reaped and ``exitcode`` is set)."""
         if self._ended:
             return True
-        if self._process is not None:  # pragma: no cover - platforms without fork
+        if self._process is not None:  # platforms without fork
             if self._process.exitcode is not None:
                 self._ended, self.exitcode = True, self._process.exitcode
             return self._ended
@@ -232,10 +232,18 @@ class _Worker:
             self._ended, self.exitcode = True, os.waitstatus_to_exitcode(status)
         return self._ended
 
-    def signal(self, signum: int) -> None:
-        if not self.poll():
-            with contextlib.suppress(ProcessLookupError):
-                os.kill(self.pid, signum)
+    def _signal(self, hard: bool) -> None:
+        """SIGTERM (or SIGKILL if ``hard``) to a process that has not ended."""
+        if self.poll():
+            return
+        if self._process is not None:  # platforms without fork
+            if hard:
+                self._process.kill()
+            else:
+                self._process.terminate()
+            return
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(self.pid, signal.SIGKILL if hard else signal.SIGTERM)
 
     def ask_to_stop(self) -> None:
         with contextlib.suppress(OSError, ValueError):
@@ -246,14 +254,14 @@ class _Worker:
         while not self.poll() and time.monotonic() < until:
             time.sleep(0.005)
         if not self.poll():
-            self.signal(signal.SIGKILL)
+            self._signal(hard=True)
             while not self.poll():
                 time.sleep(0.005)
         self.conn.close()
 
     def kill(self, grace_s: float) -> None:
         """SIGTERM, then SIGKILL after ``grace_s``; reaped, no zombie left."""
-        self.signal(signal.SIGTERM)
+        self._signal(hard=False)
         self.reap(time.monotonic() + grace_s)
 
 

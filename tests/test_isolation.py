@@ -328,6 +328,15 @@ def test_runner_configuration_and_helpers():
     assert IsolatedRunner(2)(ThreeDofFrame(), []) == []
 
 
+def test_without_fork_workers_are_spawned(monkeypatch, model, reference):
+    monkeypatch.delattr(os, "fork")  # as on a platform without fork
+    with IsolatedRunner(1, timeout_s=30.0) as runner:
+        results = runner(model, [fb.theta_in(None), fb.theta_in("segfault"), fb.theta_in(None)])
+        assert _reasons(results) == [None, "worker_crashed", None]
+        assert runner.stats == {"started": 3, "crashed": 2}
+    np.testing.assert_array_equal(results[2].frequencies_hz, reference.frequencies_hz)
+
+
 # ---- Dask: on a Dask worker, isolation uses a child process of the worker ---------------------
 def test_dask_workers_survive_faulty_builds(model, reference):
     pytest.importorskip("distributed")
