@@ -175,6 +175,8 @@ def _run_child(child: Connection, parent_pid: int) -> None:
     code = 0
     try:
         _serve(child, parent_pid)
+    except (BrokenPipeError, ConnectionResetError):  # the parent stopped listening: nothing to report
+        pass
     except BaseException:
         code = _WORKER_BUG_EXIT
         with contextlib.suppress(Exception):

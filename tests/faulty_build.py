@@ -113,6 +113,7 @@ def build(values):
     if region == "nan":
         k1 = float("nan")
         if values["nan_reaches_opensees"]:
+            faulthandler.disable()  # OpenSees may abort: no traceback dump for this deliberate fault
             material = _RAW_UNIAXIAL_MATERIAL
     ops.model("basic", "-ndm", 1, "-ndf", 1)
     for tag in (0, 1, 2):

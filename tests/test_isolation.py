@@ -337,6 +337,21 @@ def test_without_fork_workers_are_spawned(monkeypatch, model, reference):
     np.testing.assert_array_equal(results[2].frequencies_hz, reference.frequencies_hz)
 
 
+def _reasons_in_a_run_worker(evaluation_backend):
+    runner, close = make_evaluation_runner(evaluation_backend, workers=2, timeout_s=TIMEOUT_S)
+    try:
+        return _reasons(runner(fb.make_model(), POINTS))
+    finally:
+        close()
+
+
+def test_runs_on_the_process_backend_use_isolated_workers():
+    from framework.parallel import map_unordered
+
+    done = dict(map_unordered(_reasons_in_a_run_worker, ["serial", "processes"], backend="processes", workers=2))
+    assert done == {0: EXPECTED, 1: EXPECTED}
+
+
 # ---- Dask: on a Dask worker, isolation uses a child process of the worker ---------------------
 def test_dask_workers_survive_faulty_builds(model, reference):
     pytest.importorskip("distributed")
