@@ -315,7 +315,8 @@ class IsolatedRunner:
     caller. fresh_after_failure: replace a worker after a failed evaluation. retries: how
     often a point whose worker died is tried again in a fresh worker. ``stats`` counts worker
     starts ("started"), deaths ("crashed"), stops on timeout ("timed_out") and replacements
-    after a failure ("retired"). Not thread-safe across calls (calls are serialized).
+    after a failure ("retired"). Calls from several threads are serialized. Where workers are
+    spawned (no fork), a worker's start-up counts toward its first point's timeout.
     """
 
     def __init__(
