@@ -193,7 +193,7 @@ class _Worker:
     """One worker process and the parent's end of its pipe."""
 
     def __init__(self) -> None:
-        parent_pid = os.getpid()
+        parent_pid = self.owner = os.getpid()
         self.conn, child = mp.Pipe(duplex=True)
         self.model_blob: bytes | None = None
         self.exitcode: int | None = None
@@ -220,6 +220,9 @@ class _Worker:
     def poll(self) -> bool:
         """True when the process has ended (it is then reaped and ``exitcode`` is set)."""
         if self._ended:
+            return True
+        if os.getpid() != self.owner:  # a copy inherited by a forked process: not its child
+            self._ended = True
             return True
         if self._process is not None:  # platforms without fork
             if self._process.exitcode is not None:
@@ -248,8 +251,9 @@ class _Worker:
             os.kill(self.pid, signal.SIGKILL if hard else signal.SIGTERM)
 
     def ask_to_stop(self) -> None:
-        with contextlib.suppress(OSError, ValueError):
-            self.conn.send(("stop",))
+        if os.getpid() == self.owner:
+            with contextlib.suppress(OSError, ValueError):
+                self.conn.send(("stop",))
 
     def reap(self, until: float) -> None:
         """Wait until the monotonic time ``until`` for the process to end, then SIGKILL and reap it."""

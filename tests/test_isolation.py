@@ -232,6 +232,34 @@ def test_a_worker_killed_while_idle_is_replaced_without_a_failure(model):
         assert runner.stats["started"] == 2 and pid not in _children()
 
 
+_inherited: list = []
+
+
+def _use_inherited_runner():
+    (runner,) = _inherited  # a copy made by fork, holding the parent's worker
+    runner.close()
+    results = runner(fb.make_model(), [fb.theta_in(None)])  # starts a worker of its own
+    runner.close()
+    return _reasons(results)
+
+
+def test_a_runner_inherited_by_a_forked_process_leaves_the_parents_workers_alone(model):
+    import concurrent.futures as cf
+    import multiprocessing as mp
+
+    with IsolatedRunner(1) as runner:
+        runner(model, [fb.theta_in(None)])
+        _inherited[:] = [runner]
+        try:
+            with cf.ProcessPoolExecutor(1, mp_context=mp.get_context("fork")) as pool:
+                assert pool.submit(_use_inherited_runner).result() == [None]
+        finally:
+            _inherited.clear()
+        time.sleep(0.2)
+        runner(model, [fb.theta_in(None)] * 2)
+        assert runner.stats == {"started": 1}  # the parent's worker was neither stopped nor replaced
+
+
 def test_a_timed_out_worker_is_killed_and_reaped(model):
     before = _children()
     with IsolatedRunner(1, timeout_s=0.5, grace_s=0.2) as runner:
