@@ -9,6 +9,14 @@ clusters are started with ``threads_per_worker=1``.
 - ``ProcessRunner`` / ``DaskRunner`` evaluate a population of parameter points of one run
   in parallel; pass one as ``UpdatingProblem(..., runner=...)``. Results come back in
   input order, so a run gives the same numbers with any runner.
+- ``make_evaluation_runner(backend, workers, isolate, timeout_s, ...)`` picks the runner of a
+  run's evaluations and returns (runner, close).
+
+A crash, ``os._exit`` or hang of a user's model is contained by evaluating in isolated
+workers (:mod:`framework.isolation`): ProcessRunner always does, the serial and Dask runners
+do with ``isolate=True`` or a timeout. Every worker process started here ends when its
+parent dies (:func:`framework.isolation.guard_parent_death`), so killing a study leaves no
+orphan behind.
 """
 
 from __future__ import annotations
@@ -16,9 +24,12 @@ from __future__ import annotations
 import concurrent.futures as cf
 import logging
 import multiprocessing as mp
+import os
+import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 
 from framework.errors import ModelEvaluationError
+from framework.isolation import IsolatedRunner, guard_parent_death
 from framework.models.base import modal_many
 
 log = logging.getLogger(__name__)
@@ -97,7 +108,8 @@ def _map_processes(fn, items, workers) -> Iterator[tuple[int, object]]:
     pending = dict(enumerate(items))
     deaths: dict[int, int] = {}
     while pending:
-        with cf.ProcessPoolExecutor(max_workers=workers, mp_context=_context()) as pool:
+        with cf.ProcessPoolExecutor(max_workers=workers, mp_context=_context(), initializer=guard_parent_death,
+                                    initargs=(os.getpid(),)) as pool:
             futures = {pool.submit(_call, fn, item): i for i, item in pending.items()}
             broken = False
             for fut in cf.as_completed(futures):
@@ -126,40 +138,36 @@ def _evaluate_chunk(args):
     return modal_many(model, thetas)
 
 
+_local_runners: dict[tuple, IsolatedRunner] = {}
+_local_lock = threading.Lock()
+
+
+def _evaluate_chunk_isolated(args):
+    """A chunk evaluated by this process's isolated worker (e.g. on a Dask worker: the crash of
+    a build kills a child of the Dask worker, not the Dask worker)."""
+    model, thetas, timeout_s, isolate_vectorized = args
+    with _local_lock:
+        key = (timeout_s, isolate_vectorized)
+        if key not in _local_runners:
+            _local_runners[key] = IsolatedRunner(1, timeout_s, isolate_vectorized=isolate_vectorized)
+        return _local_runners[key](model, thetas)
+
+
 def _chunks(seq: Sequence, n: int) -> list[list]:
     size = max(1, -(-len(seq) // n))
     return [list(seq[i : i + size]) for i in range(0, len(seq), size)]
 
 
-class ProcessRunner:
-    """Evaluate a population across a persistent local process pool (input order kept)."""
+class ProcessRunner(IsolatedRunner):
+    """Evaluate a population across ``workers`` persistent local processes (input order kept).
 
-    def __init__(self, workers: int = 2):
-        self.workers = workers
-        self._pool: cf.ProcessPoolExecutor | None = None
+    Every model, vectorized or not, is evaluated in the workers, so a crash, ``sys.exit`` or
+    (with ``timeout_s``) a hang of one evaluation is a recorded failure of that point only
+    ("worker_crashed", "model_exit", "timeout"); see :class:`framework.isolation.IsolatedRunner`.
+    """
 
-    def __getstate__(self):
-        return {"workers": self.workers, "_pool": None}
-
-    def _ensure(self) -> cf.ProcessPoolExecutor:
-        if self._pool is None:
-            self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=_context())
-        return self._pool
-
-    def __call__(self, model, thetas: Sequence[dict]) -> list:
-        chunks = _chunks(list(thetas), self.workers)
-        try:
-            parts = list(self._ensure().map(_evaluate_chunk, [(model, c) for c in chunks]))
-        except cf.process.BrokenProcessPool:
-            log.warning("evaluation worker died; restarting the pool and redoing the population")
-            self.close()
-            parts = list(self._ensure().map(_evaluate_chunk, [(model, c) for c in chunks]))
-        return [r for part in parts for r in part]
-
-    def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown(cancel_futures=True)
-            self._pool = None
+    def __init__(self, workers: int = 2, timeout_s: float | None = None, **options):
+        super().__init__(workers, timeout_s, **options)
 
 
 class DaskRunner:
@@ -168,19 +176,30 @@ class DaskRunner:
     With ``client=None`` the runner must be called inside a Dask task: it uses
     ``worker_client()``, which secedes the task from the worker's thread pool while it
     waits, so a run executing on a worker can farm its population out to the same
-    cluster without deadlock.
+    cluster without deadlock. With ``isolate=True`` or a ``timeout_s`` each Dask worker
+    evaluates its chunks in an isolated child process (:class:`IsolatedRunner`), so a
+    crashing or hanging build is a recorded failure instead of a dead Dask worker.
     """
 
-    def __init__(self, client=None, chunks: int | None = None):
+    def __init__(self, client=None, chunks: int | None = None, isolate: bool = False, timeout_s: float | None = None,
+                 isolate_vectorized: bool = False):
         self.client = client
         self.chunks = chunks
+        self.isolate = isolate or timeout_s is not None
+        self.timeout_s = timeout_s
+        self.isolate_vectorized = isolate_vectorized
 
     def __getstate__(self):
-        return {"client": None, "chunks": self.chunks}
+        return {**self.__dict__, "client": None}
 
     def _run(self, client, model, thetas):
         n = self.chunks or max(1, len(client.scheduler_info().get("workers", {})))
-        futures = client.map(_evaluate_chunk, [(model, c) for c in _chunks(list(thetas), n)], pure=False)
+        chunks = _chunks(list(thetas), n)
+        if self.isolate:
+            tasks = [(model, c, self.timeout_s, self.isolate_vectorized) for c in chunks]
+            futures = client.map(_evaluate_chunk_isolated, tasks, pure=False)
+        else:
+            futures = client.map(_evaluate_chunk, [(model, c) for c in chunks], pure=False)
         return [r for part in client.gather(futures) for r in part]
 
     def __call__(self, model, thetas: Sequence[dict]) -> list:
@@ -190,6 +209,56 @@ class DaskRunner:
 
         with worker_client() as client:
             return self._run(client, model, thetas)
+
+
+def _no_op() -> None:
+    return None
+
+
+def make_evaluation_runner(
+    backend: str = "serial",
+    workers: int = 2,
+    isolate: bool = False,
+    timeout_s: float | None = None,
+    scheduler: str | None = None,
+    client=None,
+    isolate_vectorized: bool = False,
+) -> tuple[Callable, Callable[[], None]]:
+    """The runner of a run's model evaluations and the function that releases it.
+
+    backend "serial": in this process (``modal_many``), or with ``isolate=True`` or a
+    ``timeout_s`` (s) in one isolated worker process. "processes": ``workers`` isolated local
+    processes (always isolated). "dask": the cluster this run executes on (inside a Dask
+    worker), else ``client`` or the scheduler at ``scheduler``; isolated on each Dask worker
+    with ``isolate`` or ``timeout_s``. Vectorized models (``modal_batch``) stay in-process in
+    the serial and Dask cases unless ``isolate_vectorized``.
+    """
+    if timeout_s is not None:
+        isolate = True
+    if backend == "serial":
+        if not isolate:
+            return modal_many, _no_op
+        runner = IsolatedRunner(1, timeout_s, isolate_vectorized=isolate_vectorized)
+        return runner, runner.close
+    if backend == "processes":
+        runner = ProcessRunner(workers, timeout_s)
+        return runner, runner.close
+    if backend != "dask":
+        raise ValueError(f"unknown evaluation backend {backend!r}; use serial, processes or dask")
+    options = dict(isolate=isolate, timeout_s=timeout_s, isolate_vectorized=isolate_vectorized)
+    if client is not None:
+        return DaskRunner(client, **options), _no_op
+    from distributed import Client, get_worker
+
+    try:
+        get_worker()
+        return DaskRunner(None, **options), _no_op  # inside a Dask worker: use its cluster
+    except ValueError:
+        pass
+    if not scheduler:
+        raise ValueError("evaluation backend dask needs a scheduler address outside a Dask worker")
+    own = Client(scheduler)
+    return DaskRunner(own, **options), own.close
 
 
 def iter_items(items: Iterable) -> list:

@@ -105,3 +105,27 @@ def test_singular_model_fails_with_a_reason():
 def test_unknown_direction_is_rejected():
     with pytest.raises(ValueError, match="unknown direction 'uq'"):
         OpenSeesModel(build_cantilever, PARAMS, {"a": (2, "uq")})
+
+
+def _exiting_build(v):
+    raise SystemExit("licence server unreachable")
+
+
+def test_sys_exit_in_a_build_is_a_failure_not_the_end_of_the_study():
+    p = UpdatingProblem(OpenSeesModel(_exiting_build, PARAMS, {"a": (2, 1)}, n_modes=1),
+                        MeasuredModes(np.array([1.0])))
+    ev = p.evaluate(np.array([[0.5]]))
+    assert not ev.ok[0] and ev.reasons == ["model_exit"]
+    assert "sys.exit('licence server unreachable')" in p.log.failure_summary()
+
+
+def _nan_modulus_build(v):
+    return build_cantilever({**v, "E": v["E"] * float("nan")})
+
+
+def test_nan_never_reaches_opensees():
+    m = OpenSeesModel(_nan_modulus_build, PARAMS, DOFS, n_modes=3, solver="-fullGenLapack")
+    with pytest.raises(ModelEvaluationError, match=r"non_finite_input: ops.element got nan"):
+        m.modal({})
+    np.testing.assert_allclose(model().modal({}).frequencies_hz, model().modal({}).frequencies_hz)  # process intact
+    assert type(ops.element).__name__ == "builtin_function_or_method"

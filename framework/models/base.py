@@ -96,11 +96,18 @@ def modal_many(model: StructuralModel, thetas: Sequence[Mapping[str, float]]) ->
 
 
 def safe_modal(model: StructuralModel, theta: Mapping[str, float]):
-    """model.modal(theta), with any failure returned as a ModelEvaluationError."""
+    """model.modal(theta), with any failure returned as a ModelEvaluationError.
+
+    ``sys.exit()`` in a user's code becomes the failure "model_exit" instead of ending the
+    process; KeyboardInterrupt still propagates (Ctrl-C stops a study). Native crashes and
+    hangs cannot be caught in-process: see :mod:`framework.isolation`.
+    """
     try:
         return model.modal(theta)
     except ModelEvaluationError as exc:
         return exc
+    except SystemExit as exc:
+        return ModelEvaluationError("model_exit", f"the model called sys.exit({exc.code!r})")
     except (np.linalg.LinAlgError, ArithmeticError) as exc:
         return ModelEvaluationError("singular_matrix", f"{type(exc).__name__}: {exc}")
     except Exception as exc:  # a user's build function can raise anything

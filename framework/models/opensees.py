@@ -8,10 +8,15 @@ eigenproblem K phi = omega^2 M phi and reads the eigenvectors at the measured DO
 (f = omega / 2 pi). Every built-in OpenSees structure of the framework uses this path.
 
 The build function must be importable at module level (for process and Dask workers).
+A build that crashes the process (a segfault in native code, an abort after a NaN reached
+OpenSees) or hangs can only be contained by evaluating in an isolated worker
+(:mod:`framework.isolation`); exceptions and ``sys.exit()`` in the build become recorded
+failures ("build_failed", "model_exit") in any process.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 from collections.abc import Callable, Mapping
@@ -28,6 +33,10 @@ log = logging.getLogger(__name__)
 
 #: OpenSees direction numbers of a 3D node with 6 DOFs.
 DIRECTIONS = {"ux": 1, "uy": 2, "uz": 3, "rx": 4, "ry": 5, "rz": 6}
+
+#: OpenSees' full generalized LAPACK solver reports an eigenvalue it cannot determine (e.g.
+#: after a NaN stiffness reached the domain) as the largest double, not as inf or NaN.
+UNDETERMINED_EIGENVALUE = float(np.finfo(float).max)
 
 
 def ops_module():
@@ -114,9 +123,12 @@ class OpenSeesModel:
         ops.wipe()
         try:
             try:
-                info = self.build(values)
+                with finite_arguments(ops):
+                    info = self.build(values)
             except ModelEvaluationError:
                 raise
+            except SystemExit as exc:  # sys.exit() in a build must not end the study
+                raise ModelEvaluationError("model_exit", f"the build function called sys.exit({exc.code!r})") from exc
             except Exception as exc:  # a user's build function can raise anything
                 raise ModelEvaluationError("build_failed", f"{type(exc).__name__}: {exc}") from exc
             if self.gravity is not None:
@@ -134,6 +146,68 @@ class OpenSeesModel:
             return result
         finally:
             ops.wipe()
+
+
+_checked_commands: dict[str, Callable] = {}
+_guard_depth = 0
+
+
+def _non_finite(value) -> bool:
+    if isinstance(value, float | np.floating):
+        return not math.isfinite(value)
+    if isinstance(value, list | tuple | np.ndarray):
+        return any(_non_finite(v) for v in np.asarray(value, dtype=object).ravel())
+    return False
+
+
+def _checking(name: str, command: Callable) -> Callable:
+    def checked(*args):
+        for value in args:
+            kind = type(value)
+            if kind is float:  # the common case first: NaN fails both comparisons
+                if -math.inf < value < math.inf:
+                    continue
+            elif kind is int or kind is str or not _non_finite(value):
+                continue
+            raise ModelEvaluationError("non_finite_input", f"ops.{name} got {value!r} in {args!r}")
+        return command(*args)
+
+    checked.__name__ = checked.__qualname__ = name
+    checked.__doc__ = command.__doc__
+    return checked
+
+
+@contextlib.contextmanager
+def finite_arguments(ops):
+    """Within the block every command of the ``ops`` module rejects NaN and infinite numbers
+    with ModelEvaluationError("non_finite_input").
+
+    OpenSees does not reject them: given a NaN stiffness, its full LAPACK eigen solver reports
+    undetermined eigenvalues and leaves a corrupted heap that aborts the process at once or at
+    a later, valid evaluation. The module's commands are swapped for checking wrappers while a
+    build function runs, so builds calling ``ops.command(...)`` are covered; commands imported
+    by name (``from openseespy.opensees import node``) are not: evaluate such models in an
+    isolated worker (:mod:`framework.isolation`).
+    """
+    global _guard_depth
+    if _guard_depth:  # already guarded (a build inside a build)
+        yield
+        return
+    if not _checked_commands:
+        for name in dir(ops):
+            command = getattr(ops, name)
+            if not name.startswith("_") and type(command).__name__ == "builtin_function_or_method":
+                _checked_commands[name] = _checking(name, command)
+    originals = {name: getattr(ops, name) for name in _checked_commands}
+    for name, checked in _checked_commands.items():
+        setattr(ops, name, checked)
+    _guard_depth += 1
+    try:
+        yield
+    finally:
+        _guard_depth -= 1
+        for name, command in originals.items():
+            setattr(ops, name, command)
 
 
 def run_static(ops, options: GravityAnalysis) -> None:
@@ -162,8 +236,8 @@ def eigen(ops, n_modes: int, solver: str = "-genBandArpack") -> np.ndarray:
     values = np.atleast_1d(np.asarray(values, dtype=float))
     if values.size < n_modes:
         raise ModelEvaluationError("too_few_modes", f"got {values.size} of {n_modes} modes")
-    if not np.all(np.isfinite(values)):
-        raise ModelEvaluationError("eigen_failed", f"non-finite eigenvalues {values.tolist()}")
+    if not np.all(np.isfinite(values)) or np.any(np.abs(values) >= UNDETERMINED_EIGENVALUE):
+        raise ModelEvaluationError("eigen_failed", f"non-finite or undetermined eigenvalues {values.tolist()}")
     if np.any(values < -1e-6 * max(1.0, float(np.max(np.abs(values))))):
         raise ModelEvaluationError("indefinite_matrix", f"negative eigenvalue {values.min():.4g}")
     return values
