@@ -354,32 +354,18 @@ def _evaluation_bar(spec: dict):
 
 
 def evaluation_runner(execution: dict):
-    """The runner for a run's model evaluations, from ``execution.evaluation_backend``.
+    """The runner of a run's model evaluations from the ``execution`` section: backend
+    (serial, processes, dask), isolation of the model in a worker process and the
+    per-evaluation timeout (:func:`framework.parallel.make_evaluation_runner`)."""
+    from framework.parallel import make_evaluation_runner
 
-    "processes": a local pool of ``workers`` processes; "dask": the cluster this run executes
-    on (inside a Dask worker) or the one at ``scheduler``. Returns (runner, close).
-    """
-    backend = execution.get("evaluation_backend", "serial")
-    if backend == "serial":
-        return None, lambda: None
-    if backend == "processes":
-        from framework.parallel import ProcessRunner
-
-        runner = ProcessRunner(execution.get("workers", 2))
-        return runner, runner.close
-    from distributed import Client, get_worker
-
-    from framework.parallel import DaskRunner
-
-    try:
-        get_worker()
-        return DaskRunner(None), lambda: None  # inside a Dask worker: use its cluster
-    except ValueError:
-        pass
-    if not execution.get("scheduler"):
-        raise ValueError("execution.evaluation_backend=dask needs execution.scheduler outside a Dask worker")
-    client = Client(execution["scheduler"])
-    return DaskRunner(client), client.close
+    return make_evaluation_runner(
+        execution.get("evaluation_backend", "serial"),
+        workers=execution.get("workers", 2),
+        isolate=bool(execution.get("isolate", False)),
+        timeout_s=execution.get("evaluation_timeout_s"),
+        scheduler=execution.get("scheduler"),
+    )
 
 
 def run(spec: dict) -> dict[str, list[dict]]:
@@ -431,7 +417,8 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
     theta = params.as_dict(result.theta_best)
     for case in task.get("validation", []):
         try:
-            vproblem = build_problem(task, structure_options=case["structure_options"], measured_cfg=case["measured"])
+            vproblem = build_problem(task, structure_options=case["structure_options"], measured_cfg=case["measured"],
+                                     runner=runner)
             tables["modes"] += mode_rows(case["case"], vproblem, vproblem.parameters.from_dict(theta))
         except Exception as exc:  # a failed prediction is a row, not the end of the run
             tables["modes"].append({"case": case["case"], "mode": 0, "error": f"{type(exc).__name__}: {exc}"})
