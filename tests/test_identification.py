@@ -635,3 +635,14 @@ def test_shipped_identification_study_with_short_records(tmp_path):
     modes = tables["modes"]
     deck = modes[(modes["structure"] == "bridge") & (modes["method"] == "n4sid") & (modes["deck_energy"] >= 0.5)]
     _assert_acceptance(deck)
+
+
+def test_unknown_frf_channels_fail_before_any_run(tmp_path):
+    from framework.study.config import validate
+    from framework.study.runner import run_study
+
+    tests = {"sweeps": {**SMALL["tests"]["sweeps"], "peak_picking": {"frf_channels": ["y", "z"]}}}
+    cfg = validate(dict(SMALL, tests=tests, report={}, output=str(tmp_path / "x")))
+    with pytest.raises(InputError, match=r"tests.sweeps.peak_picking.frf_channels: \['z'\] are not channels"):
+        run_study(cfg, figures=False)
+    assert not (tmp_path / "x" / "_runs").exists() or not list((tmp_path / "x" / "_runs").glob("*.json"))

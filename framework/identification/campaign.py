@@ -88,6 +88,12 @@ def simulate(
     return rec.select([c for c in rec.output_labels if c.endswith(f"_{component}")])
 
 
+def channels(structure: str, component: str = "all") -> tuple[str, ...]:
+    """The output channels of ``structure``'s records restricted to ``component``."""
+    names = lab_frame.DOFS if structure == "lab_frame" else bridge_tests.true_modes()["dofs"]
+    return tuple(names) if component == "all" else tuple(c for c in names if c.endswith(f"_{component}"))
+
+
 @dataclass(frozen=True)
 class TrueModes:
     """Modes of the simulating model at the record's channels: f_hz (m,), zeta (m,),

@@ -32,6 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from framework.errors import InputError
 from framework.identification.frf import FRF
 from framework.identification.stability import SelectedModes
 
@@ -157,4 +158,7 @@ def frf_channels(choice: str | Sequence[str], frf: FRF, peaks: pd.DataFrame) -> 
     if choice == "peaks":
         at_peaks = set(peaks["channel"])
         return [c for c in frf.output_labels if c in at_peaks]
+    unknown = [c for c in choice if c not in frf.output_labels]
+    if unknown:
+        raise InputError(f"frf_channels: {unknown} are not output channels {list(frf.output_labels)}")
     return list(choice)

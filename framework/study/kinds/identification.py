@@ -29,6 +29,7 @@ in ``report.export`` (:mod:`framework.identification.export`).
 
 from __future__ import annotations
 
+import json
 import time
 from typing import Annotated, Any, Literal
 
@@ -282,6 +283,25 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
                 parts.append({"label": label, "seed": seeds[0], "task": task, "columns": setting_columns(task),
                               "relevant": relevant})
     return parts
+
+
+def preflight(specs: list[dict]) -> None:
+    """Channels named in ``peak_picking.frf_channels`` exist (InputError before any run)."""
+    from framework.identification import campaign
+
+    seen = set()
+    for spec in specs:
+        task = spec["task"]
+        names = task["settings"].get("frf_channels")
+        key = (task["structure"], task["component"], json.dumps(names))
+        if not isinstance(names, list) or key in seen:
+            continue
+        seen.add(key)
+        known = campaign.channels(task["structure"], task["component"])
+        unknown = [c for c in names if c not in known]
+        if unknown:
+            raise InputError(f"study {spec['study']!r}: tests.{spec['label']}.peak_picking.frf_channels: {unknown} "
+                             f"are not channels of {task['structure']} (component {task['component']}): {list(known)}")
 
 
 # ---- one run -----------------------------------------------------------------------------
