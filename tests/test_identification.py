@@ -3,9 +3,12 @@ FRF and peak picking, subspace identification, stability, export."""
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import scipy.signal
 
@@ -355,7 +358,7 @@ def bridge_truth():
 @pytest.mark.parametrize(("direction", "component"), [("vertical", "uz"), ("lateral", "uy")])
 def test_bridge_sweep_meets_acceptance_on_deck_modes(bridge_truth, direction, component):
     from framework.identification import bridge_tests
-    from framework.identification.study import BRIDGE_SETTINGS
+    from framework.identification.datasets import BRIDGE_SETTINGS
 
     # shortened record: 120 s sweep over 1-10 Hz instead of 391 s over 1-15 Hz
     full = bridge_tests.sweep(seed=21, direction=direction, duration_s=120.0, f_range_hz=(1.0, 10.0))
@@ -364,7 +367,7 @@ def test_bridge_sweep_meets_acceptance_on_deck_modes(bridge_truth, direction, co
     res = pl.identify(rec, BRIDGE_SETTINGS)
     tr = bridge_truth
     rows = [tr["dofs"].index(c) for c in channels]
-    types = bridge_tests.TEST_MODE_TYPES[direction]
+    types = bridge_tests.COMPONENT_MODE_TYPES[component]
     keep = np.flatnonzero(np.isin(tr["mode_type"], types) & (tr["f_hz"] <= 10.0))
     table = pl.compare_to_truth(res.selected, tr["f_hz"][keep], tr["zeta"][keep], tr["shapes"][np.ix_(rows, keep)])
     table = table.iloc[: keep.size].assign(deck_energy=tr["deck_energy"][keep])
@@ -379,37 +382,21 @@ def test_bridge_sweep_meets_acceptance_on_deck_modes(bridge_truth, direction, co
 
 # ---------------------------------------------------------------------------- end to end
 def test_lab_update_from_identified_modes_recovers_true_parameters(lab_sweep):
-    from framework.identification.study import LAB_LABELS, LAB_SETTINGS, update_lab
+    from framework.identification.datasets import LAB_SETTINGS
+    from framework.models import lab_frame
+    from framework.optimizers import Budget, run_optimizer
+    from framework.problem import UpdatingProblem
 
     res = pl.identify(lab_sweep, LAB_SETTINGS)
-    measured = pl.to_measured_modes(res.selected, "lab_identified", LAB_LABELS)
-    table = update_lab(measured, algorithms=(("sm", (1,)),))
-    assert len(table) == 6 and (table["objective"] < 1e-8).all()
+    measured = pl.to_measured_modes(res.selected, "lab_identified", lab_tests.MODE_LABELS)
+    problem = UpdatingProblem(lab_frame.make_model(), measured)
+    budget = Budget(max_evaluations=20000, stall_iterations=50, target_objective=1e-12)
+    result = run_optimizer("sm", problem, 1, budget)
+    assert result.objective < 1e-8
     # from the initial values the sensitivity method lands on the true frame
-    assert (table["error_pct_of_range"].abs() < 1.0).all(), table
-
-
-@pytest.mark.slow
-def test_study_writes_tables_and_figures(tmp_path):
-    from framework.identification.study import run
-
-    tables = run(tmp_path, bridge=True, quick=True)
-    for name in (
-        "modes.csv",
-        "stability.csv",
-        "peaks.csv",
-        "stability_lab_frame.png",
-        "frf_lab_frame.png",
-        "stability_bridge_vertical.png",
-        "frf_bridge_lateral.png",
-        "lab_frame_identified.yaml",
-        "bridge_vertical_identified.yaml",
-        "records/lab_sweep_1.csv",
-    ):
-        assert (tmp_path / name).exists(), name
-    modes = tables["modes"]
-    assert set(modes["structure"]) == {"lab_frame", "bridge"}
-    assert {"f_true_hz", "f_identified_hz", "zeta_true", "zeta_identified", "mac_to_true", "stable"} <= set(modes)
+    for p, value in zip(problem.parameters, result.theta_best):
+        error_pct_of_range = 100 * (value - lab_tests.TRUE_THETA[p.name]) / (p.upper - p.lower)
+        assert abs(error_pct_of_range) < 1.0, (p.name, value)
 
 
 def test_identified_dataset_for_the_registry(truth):
@@ -420,3 +407,242 @@ def test_identified_dataset_for_the_registry(truth):
     np.testing.assert_allclose(modes.frequencies_hz, truth[0], rtol=0.005)
     with pytest.raises(InputError, match="unknown case 'x'"):
         measured("x")
+
+
+# ---------------------------------------------------------------------------- run kind `identification`
+ROOT = Path(__file__).resolve().parents[1]
+LAB_SUBSPACE = {"orders": {"min": 6, "max": 40, "step": 2}, "block_rows": 20, "decimate": 4, "mac_min": 0.9,
+                "band_hz": [0.5, 15.0]}
+SMALL = {
+    "study": "ident_small",
+    "kind": "identification",
+    "tests": {
+        "sweeps": {"structure": "lab_frame", "test": "sweep", "seed": 1, "records": 2, "duration_s": 60.0,
+                   "methods": ["n4sid", "peak_picking"], "subspace": LAB_SUBSPACE,
+                   "peak_picking": {"band_hz": [1.0, 15.0], "min_coherence": 0.5, "frf_max_lines": 100}},
+        "snap": {"structure": "lab_frame", "test": "snap_back", "seed": 4, "duration_s": 20.0, "methods": ["ssi_cov"],
+                 "subspace": LAB_SUBSPACE},
+    },
+    "execution": {"progress": False},
+    "report": {"export": {"lab_identified": {"label": "sweeps", "method": "n4sid", "true_labels": True}}},
+}
+KIND_TABLES = ("runs", "modes", "identified", "shapes", "stability", "peaks", "frf")
+
+
+def _study_tables(root):
+    return {n: pd.read_csv(root / f"{n}.csv") for n in KIND_TABLES}
+
+
+def _assert_same_tables(a, b):
+    for name in a:
+        x, y = (t.drop(columns=[c for c in ("wall_s",) if c in t]) for t in (a[name], b[name]))
+        pd.testing.assert_frame_equal(x, y, check_exact=True)
+
+
+@pytest.fixture(scope="module")
+def small_study(tmp_path_factory):
+    from framework.study.config import validate
+    from framework.study.runner import run_study
+
+    out = tmp_path_factory.mktemp("ident") / "serial"
+    tables = run_study(validate(dict(SMALL, output=str(out))))
+    return out, tables
+
+
+def test_identification_study_tables_physics_and_settings_columns(small_study):
+    out, tables = small_study
+    runs = tables["runs"]
+    assert len(runs) == 3 and (runs["status"] == "ok").all()
+    assert set(runs["method"]) == {"n4sid", "peak_picking", "ssi_cov"}
+    # every setting is a typed column of every table
+    modes = tables["modes"]
+    for col, value in (("duration_s", 60.0), ("sampling_hz", 200.0), ("output_noise", 0.02), ("block_rows", 20),
+                       ("orders_min", 6), ("orders_max", 40), ("decimate", 4), ("records", 2)):
+        row = modes[(modes["label"] == "sweeps") & (modes["method"] == "n4sid")].iloc[0]
+        assert row[col] == value, col
+    assert modes["orders_max"].dtype.kind in "iu" or str(modes["orders_max"].dtype) == "Int64"
+    # each record, their mean and the snap-back meet the acceptance criteria
+    sub = modes[modes["method"] != "peak_picking"]
+    assert set(sub["record"]) == {"lab_sweep_1", "lab_sweep_2", "mean", "lab_snapback_4"}
+    _assert_acceptance(sub)
+    pp = modes[modes["method"] == "peak_picking"]
+    assert set(pp["record"]) == {"average"}
+    found = pp[pp["stable"] == "yes"]
+    assert len(found) >= 2 and (found["f_error_pct"].abs() < 0.5).all()
+    # stability rows of each record, shapes of each identified mode, a thinned FRF
+    assert set(tables["stability"]["record"]) == {"lab_sweep_1", "lab_sweep_2", "lab_snapback_4"}
+    assert len(tables["shapes"]) == 3 * len(tables["identified"])
+    frf = tables["frf"]
+    assert set(frf["channel"]) == {"indicator"} | set(tables["peaks"]["channel"])
+    assert frf.groupby("channel").size().max() < 200
+    acc = pd.read_csv(out / "accuracy.csv")
+    assert (acc.loc[acc["method"] != "peak_picking", "n_found"] == 3).all()
+
+
+def test_identification_study_figures_and_exported_modes(small_study, truth):
+    out, tables = small_study
+    for name in ("stability_sweeps.png", "stability_snap.png", "frf_sweeps.png", "accuracy.csv"):
+        assert (out / name).exists(), name
+    modes = load_modes(out / "lab_identified.yaml")
+    assert modes.labels == lab_tests.MODE_LABELS and modes.dofs == ("y", "x", "torsion")
+    np.testing.assert_allclose(modes.frequencies_hz, truth[0], rtol=0.005)
+    mean = tables["identified"][(tables["identified"]["record"] == "mean")]
+    np.testing.assert_array_equal(modes.frequencies_hz, mean["frequency_hz"])
+    assert modes.frequency_std_hz is not None
+
+
+def test_identification_study_resume_and_processes_give_the_same_tables(small_study, tmp_path):
+    import shutil
+
+    from framework.study.config import validate
+    from framework.study.runner import run_study
+
+    out, _ = small_study
+    copy = tmp_path / "resumed"
+    shutil.copytree(out, copy)
+    parts = sorted((copy / "_runs").glob("*.json"))
+    parts[0].unlink()
+    run_study(validate(dict(SMALL, output=str(copy))), resume=True, figures=False)
+    _assert_same_tables(_study_tables(out), _study_tables(copy))
+    proc = validate(dict(SMALL, output=str(tmp_path / "proc"), execution={"backend": "processes", "workers": 2,
+                                                                           "progress": False}))
+    run_study(proc, figures=False)
+    _assert_same_tables(_study_tables(out), _study_tables(tmp_path / "proc"))
+
+
+def test_identification_study_on_dask_gives_the_same_tables(small_study, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    from framework.study.config import validate
+    from framework.study.runner import run_study
+
+    out, _ = small_study
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    try:
+        cfg = validate(dict(SMALL, output=str(tmp_path / "dask"), execution={
+            "backend": "dask", "scheduler": cluster.scheduler_address, "progress": False}))
+        run_study(cfg, figures=False)
+    finally:
+        cluster.close()
+    _assert_same_tables(_study_tables(out), _study_tables(tmp_path / "dask"))
+
+
+def test_report_options_and_other_methods_settings_keep_run_ids():
+    from framework.study.config import validate
+    from framework.study.plan import plan
+
+    base = {s["run_id"]: s for s in plan(validate(SMALL))}
+    other = dict(SMALL, report={}, execution={"backend": "processes", "progress": False})
+    assert set(base) == {s["run_id"] for s in plan(validate(other))}
+    # a subspace setting changes the subspace runs of that test only
+    tests = {**SMALL["tests"], "sweeps": {**SMALL["tests"]["sweeps"], "subspace": {**LAB_SUBSPACE, "block_rows": 16}}}
+    changed = {s["run_id"]: s for s in plan(validate(dict(SMALL, tests=tests)))}
+    assert {(base[r]["label"], base[r]["task"]["method"]) for r in set(base) - set(changed)} == {("sweeps", "n4sid")}
+
+
+def test_a_swept_setting_is_a_column_and_the_other_methods_runs_are_not_repeated():
+    from framework.study.config import validate
+    from framework.study.plan import plan
+
+    specs = plan(validate(dict(SMALL, sweep={"tests.sweeps.subspace.block_rows": [16, 20]})))
+    sweeps = [s for s in specs if s["label"] == "sweeps"]
+    assert sorted((s["task"]["method"], s["columns"]["block_rows"]) for s in sweeps) == [
+        ("n4sid", 16), ("n4sid", 20), ("peak_picking", None)]
+
+
+def test_runs_repeat_a_test_with_new_record_seeds():
+    from framework.study.config import validate
+    from framework.study.plan import plan
+
+    specs = plan(validate(dict(SMALL, runs=2)))
+    seeds = sorted(tuple(s["task"]["record_seeds"]) for s in specs if s["label"] == "sweeps")
+    assert seeds == [(1, 2), (1, 2), (3, 4), (3, 4)]
+
+
+@pytest.mark.parametrize("path, value, message", [
+    ("tests.snap.methods", ["n4sid"], "tests.snap: methods \\['n4sid'\\] need a measured input"),
+    ("tests.snap.test", "hammer", "test 'hammer' is not a test of structure 'lab_frame'"),
+    ("tests.snap.component", "uz", "component: 'uz' is not one of \\['all'\\]"),
+    ("tests.snap.subspace.orders", {"min": 6, "max": 7, "step": 2}, "fewer than two orders"),
+    ("tests.snap.duration_s", -1.0, "tests.snap.duration_s: Input should be greater than 0"),
+    ("tests.sweeps.f_range_hz", [0.0, 120.0], "reaches the Nyquist frequency 100.0"),
+    ("tests.sweeps.subspace", None, "subspace: settings .* are required for n4sid and ssi_cov"),
+    ("report.export.lab_identified.label", "nope", "report.export.lab_identified.label: no test 'nope'"),
+    ("report.figures", 3, "ident.yaml: report: figures: unknown key \\(value: 3\\)"),
+    ("report.export.lab_identified.method", "ssi_cov", "report.export.lab_identified.method: test .sweeps. has no"),
+])
+def test_identification_config_errors_name_the_field(path, value, message):
+    from framework.study.config import set_path, validate
+
+    data = json.loads(json.dumps(SMALL))
+    set_path(data, path, value)
+    with pytest.raises(InputError, match=message):
+        validate(data, source="ident.yaml")
+
+
+def test_shipped_config_uses_the_documented_settings_of_the_builtin_data():
+    from framework.identification.datasets import BRIDGE_SETTINGS, LAB_SETTINGS
+    from framework.study.config import load
+    from framework.study.kinds.identification import method_settings
+
+    cfg = load(ROOT / "studies" / "identification.yaml")
+    for name, ref in (("lab_frame", LAB_SETTINGS), ("bridge_vertical", BRIDGE_SETTINGS)):
+        s = method_settings(cfg.tests[name], "n4sid")
+        assert tuple(range(s["orders"]["min"], s["orders"]["max"] + 1, s["orders"]["step"])) == ref.orders
+        assert (s["block_rows"], s["decimate"], s["mac_min"], tuple(s["band_hz"])) == (
+            ref.block_rows, ref.decimate, ref.mac_min, ref.band_hz)
+    assert (cfg.tests["lab_frame"].seed, cfg.tests["lab_frame"].records) == (1, 3)
+
+
+def test_committed_identified_modes_equal_the_builtin_data_set():
+    from framework.identification.datasets import measured
+
+    committed = load_modes(ROOT / "results" / "identification" / "lab_frame_identified.yaml")
+    builtin = measured("lab_frame")
+    assert committed.labels == builtin.labels and committed.dofs == builtin.dofs
+    np.testing.assert_allclose(committed.frequencies_hz, builtin.frequencies_hz, rtol=1e-12)
+    np.testing.assert_allclose(committed.shapes, builtin.shapes, rtol=1e-10, atol=1e-12)
+
+
+def test_updating_from_identified_modes_reports_the_error_against_the_truth(tmp_path):
+    import yaml
+
+    from framework.study.config import validate
+    from framework.study.runner import run_study
+
+    data = yaml.safe_load((ROOT / "studies" / "identification_updating.yaml").read_text())
+    data.update(measured={"builtin": "identified", "case": "lab_frame"}, algorithms={"sm": {"algorithm": "sm", "runs": 1}},
+                output=str(tmp_path / "upd"), execution={"progress": False})
+    run_study(validate(data), figures=False)
+    err = pd.read_csv(tmp_path / "upd" / "parameter_error.csv")
+    assert sorted(err["parameter"]) == sorted(lab_tests.TRUE_THETA)
+    assert (err["objective"] < 1e-12).all() and (err["error_pct_of_range"].abs() < 0.2).all(), err
+    np.testing.assert_allclose(err["true"], err["parameter"].map(lab_tests.TRUE_THETA))
+
+
+@pytest.mark.slow
+def test_shipped_identification_study_with_short_records(tmp_path):
+    from framework.study.config import load
+    from framework.study.runner import run_study
+
+    overrides = [f"output={tmp_path}", "execution.progress=false"] + [
+        f"tests.{t}.duration_s={d}" for t, d in (("lab_frame", 60.0), ("bridge_vertical", 120.0),
+                                                   ("bridge_lateral", 120.0), ("bridge_jumping", 120.0))]
+    tables = run_study(load(ROOT / "studies" / "identification.yaml", overrides))
+    assert (tables["runs"]["status"] == "ok").all()
+    for name in ("stability_lab_frame.png", "frf_bridge_lateral.png", "stability_bridge_jumping.png",
+                 "lab_frame_identified.yaml", "bridge_vertical_identified.yaml", "bridge_lateral_identified.yaml"):
+        assert (tmp_path / name).exists(), name
+    modes = tables["modes"]
+    deck = modes[(modes["structure"] == "bridge") & (modes["method"] == "n4sid") & (modes["deck_energy"] >= 0.5)]
+    _assert_acceptance(deck)
+
+
+def test_unknown_frf_channels_fail_before_any_run(tmp_path):
+    from framework.study.config import validate
+    from framework.study.runner import run_study
+
+    tests = {"sweeps": {**SMALL["tests"]["sweeps"], "peak_picking": {"frf_channels": ["y", "z"]}}}
+    cfg = validate(dict(SMALL, tests=tests, report={}, output=str(tmp_path / "x")))
+    with pytest.raises(InputError, match=r"tests.sweeps.peak_picking.frf_channels: \['z'\] are not channels"):
+        run_study(cfg, figures=False)
+    assert not (tmp_path / "x" / "_runs").exists() or not list((tmp_path / "x" / "_runs").glob("*.json"))

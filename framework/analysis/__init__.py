@@ -29,6 +29,7 @@ log = logging.getLogger(__name__)
 ANALYSES: dict[str, str] = {
     "selection": "framework.analysis.selection",
     "minima": "framework.analysis.minima",
+    "truth": "framework.analysis.truth",
 }
 
 

@@ -43,8 +43,9 @@ SHAKER_STATIONS = ("d12W", "d18W", "d36W")
 JUMP_STATION = "d12W"
 SWEEP_DURATION_S = 391.0
 SWEEP_RANGE_HZ = (1.0, 15.0)
-#: vertical test identifies vertical and torsional modes, lateral test lateral and torsional
-TEST_MODE_TYPES = {"vertical": ("vertical", "torsional"), "lateral": ("lateral", "torsional")}
+#: mode types seen by the channels of one component: vertical (uz) channels see vertical and
+#: torsional modes, lateral (uy) channels lateral and torsional ones
+COMPONENT_MODE_TYPES = {"uz": ("vertical", "torsional"), "uy": ("lateral", "torsional")}
 
 
 @functools.lru_cache(maxsize=4)
@@ -105,13 +106,14 @@ def sweep(
     theta: Mapping[str, float] | None = None,
     output_noise: float = OUTPUT_NOISE_RATIO,
     input_noise: float = INPUT_NOISE_RATIO,
+    sampling_hz: float = SAMPLING_HZ,
 ) -> VibrationRecord:
     """Forced-vibration sweep test with three synchronized shakers."""
     rng = np.random.default_rng(seed)
     system = shaker_system(direction, theta)
-    u = sine_sweep(duration_s, SAMPLING_HZ, *f_range_hz, force_n)
-    y = simulate(system, u[:, None], SAMPLING_HZ)
-    t = np.arange(u.size) / SAMPLING_HZ
+    u = sine_sweep(duration_s, sampling_hz, *f_range_hz, force_n)
+    y = simulate(system, u[:, None], sampling_hz)
+    t = np.arange(u.size) / sampling_hz
     meta = {
         "structure": "bridge",
         "kind": f"sweep_{direction}",
@@ -138,13 +140,14 @@ def jumping(
     duration_s: float = 300.0,
     theta: Mapping[str, float] | None = None,
     output_noise: float = OUTPUT_NOISE_RATIO,
+    sampling_hz: float = SAMPLING_HZ,
 ) -> VibrationRecord:
     """Jumping test at the west edge of d12 (output only)."""
     rng = np.random.default_rng(seed)
     system = _system(true_modes(theta), [f"{JUMP_STATION}_uz"], "jump_force")
-    p = jumping_load(duration_s, SAMPLING_HZ, rng)
-    y = simulate(system, p[:, None], SAMPLING_HZ)
-    t = np.arange(p.size) / SAMPLING_HZ
+    p = jumping_load(duration_s, sampling_hz, rng)
+    y = simulate(system, p[:, None], sampling_hz)
+    t = np.arange(p.size) / sampling_hz
     meta = {
         "structure": "bridge",
         "kind": "jumping",

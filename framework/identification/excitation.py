@@ -1,4 +1,4 @@
-"""Excitation signals of the simulated tests: sine sweep, jumping, ambient noise.
+"""Excitation signals of the simulated tests: sine sweep and jumping load.
 
 All return (n,) arrays sampled at ``sampling_hz``; amplitudes are in the input's unit
 (N for a shaker force, m/s^2 for a table acceleration).
@@ -70,17 +70,3 @@ def jumping(
         t += 1.0 / rng.uniform(*rate_hz)
     return x
 
-
-def white_noise(duration_s: float, sampling_hz: float, rng: np.random.Generator, std: float = 1.0) -> np.ndarray:
-    """Gaussian white noise of standard deviation ``std``."""
-    return std * rng.standard_normal(_n_samples(duration_s, sampling_hz))
-
-
-def time_vector(n_samples: int, sampling_hz: float) -> np.ndarray:
-    """t_k = k / fs."""
-    return np.arange(n_samples) / float(sampling_hz)
-
-
-def sweep_rate_hz_per_s(duration_s: float, f_start_hz: float, f_end_hz: float) -> float:
-    """Linear sweep rate (f1 - f0) / T."""
-    return (f_end_hz - f_start_hz) / duration_s

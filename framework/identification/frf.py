@@ -12,7 +12,6 @@ from __future__ import annotations
 import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -214,41 +213,3 @@ def _half_power_half_width(mag: np.ndarray, p: int, df: float) -> float:
     right = j - (level - mag[j]) / (mag[j - 1] - mag[j]) if mag[j - 1] != mag[j] else float(j)
     return 0.5 * (right - left) * df
 
-
-def plot_frf(
-    frf: FRF,
-    path: str | Path,
-    peaks: pd.DataFrame | None = None,
-    title: str = "",
-    f_max_hz: float | None = None,
-) -> Path:
-    """Figure with FRF magnitude (log), phase and coherence for every output of input 0."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from framework.io import save_figure
-
-    f = frf.frequency_hz
-    sel = f <= (f_max_hz if f_max_hz else f[-1])
-    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True, gridspec_kw={"height_ratios": [2, 1, 1]})
-    for k, lab in enumerate(frf.output_labels):
-        h = frf.h[sel, k, 0]
-        axes[0].semilogy(f[sel], np.abs(h), lw=0.8, label=lab)
-        axes[1].plot(f[sel], np.degrees(np.angle(h)), lw=0.6)
-        axes[2].plot(f[sel], frf.coherence[sel, k], lw=0.6)
-    if peaks is not None:
-        for _, row in peaks.iterrows():
-            for ax in axes:
-                ax.axvline(row["frequency_hz"], color="k" if row["accepted"] else "0.7", ls="--", lw=0.6)
-    axes[0].set_ylabel(f"|H1| (out / {frf.input_labels[0]})")
-    axes[1].set_ylabel("phase (deg)")
-    axes[2].set_ylabel("coherence")
-    axes[2].set_ylim(0, 1.05)
-    axes[2].set_xlabel("frequency (Hz)")
-    if len(frf.output_labels) <= 8:
-        axes[0].legend(fontsize=7, ncol=2)
-    axes[0].set_title(title or f"H1 FRF ({frf.n_averages} averages)")
-    fig.tight_layout()
-    return save_figure(fig, path, dpi=120, tight=False)

@@ -31,6 +31,8 @@ TABLE_ANGLE_DEG = 20.0
 OUTPUT_NOISE_RATIO = 0.02
 INPUT_NOISE_RATIO = 0.01
 DAMPING_RATIO = tuple(float(z) for z in lf.DAMPING_RATIO)
+#: names of the three modes, in order of frequency
+MODE_LABELS = ("1st y", "1st x", "1st torsion")
 #: "True" frame used to test the identification and updating chain (near the measured
 #: frequencies 3.58 / 5.01 / 7.28 Hz, all six parameters away from their initial values).
 TRUE_THETA = {"kyy": 8950.0, "kxx": 17300.0, "kxy": 150.0, "krr": 2600.0, "ex": 0.02, "ey": -0.015}
@@ -76,13 +78,14 @@ def sweep(
     theta: Mapping[str, float] | None = None,
     output_noise: float = OUTPUT_NOISE_RATIO,
     input_noise: float = INPUT_NOISE_RATIO,
+    sampling_hz: float = SAMPLING_HZ,
 ) -> VibrationRecord:
     """Sine-sweep shake-table test; the seed draws the sensor noise."""
     rng = np.random.default_rng(seed)
     system = table_system(theta)
-    u = sine_sweep(duration_s, SAMPLING_HZ, *f_range_hz, amplitude_m_per_s2)
-    y = simulate(system, u[:, None], SAMPLING_HZ)
-    t = np.arange(u.size) / SAMPLING_HZ
+    u = sine_sweep(duration_s, sampling_hz, *f_range_hz, amplitude_m_per_s2)
+    y = simulate(system, u[:, None], sampling_hz)
+    t = np.arange(u.size) / sampling_hz
     meta = {
         "structure": "lab_frame",
         "kind": "sweep",
@@ -110,14 +113,15 @@ def snap_back(
     pull_n: float = 50.0,
     theta: Mapping[str, float] | None = None,
     output_noise: float = OUTPUT_NOISE_RATIO,
+    sampling_hz: float = SAMPLING_HZ,
 ) -> VibrationRecord:
     """Snap-back: free vibration after releasing a static corner pull (output only)."""
     rng = np.random.default_rng(seed)
     system = pull_system(theta)
-    n = int(duration_s * SAMPLING_HZ)
+    n = int(duration_s * sampling_hz)
     q0 = system.modal_displacement([pull_n])
-    y = simulate(system, None, SAMPLING_HZ, n_samples=n, q0=q0)
-    t = np.arange(n) / SAMPLING_HZ
+    y = simulate(system, None, sampling_hz, n_samples=n, q0=q0)
+    t = np.arange(n) / sampling_hz
     meta = {
         "structure": "lab_frame",
         "kind": "snap_back",

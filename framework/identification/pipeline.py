@@ -125,12 +125,15 @@ def identify(record: VibrationRecord, settings: IdentificationSettings | None = 
 def peak_picking(
     records: VibrationRecord | Sequence[VibrationRecord],
     band_hz: tuple[float, float] | None = None,
+    n_segments: int = 5,
+    overlap: float = 0.5,
     **kwargs,
 ) -> tuple[FRF, pd.DataFrame, SelectedModes]:
-    """H1 FRF averaged over the records, peaks, and the accepted peaks as modes
-    (shape = real part of the rotated FRF column at the peak bin, damping by the
-    half-power method, NaN when the peak is narrower than a frequency line)."""
-    frf = h1_frf(records)
+    """H1 FRF averaged over the records (Welch: ``n_segments``, ``overlap``), peaks
+    (``kwargs`` go to :func:`pick_peaks`), and the accepted peaks as modes (shape = real part
+    of the rotated FRF column at the peak bin, damping by the half-power method, NaN when the
+    peak is narrower than a frequency line)."""
+    frf = h1_frf(records, n_segments=n_segments, overlap=overlap)
     peaks = pick_peaks(frf, band_hz=band_hz, **kwargs)
     acc = peaks[peaks["accepted"]].reset_index(drop=True)
     shapes = []
@@ -162,7 +165,8 @@ def compare_to_truth(
     MAC, if that MAC exceeds ``mac_pair_min`` (else the true mode counts as not found).
 
     Columns: mode, label, f_true_hz, f_identified_hz, f_error_pct, zeta_true,
-    zeta_identified, zeta_error_pct, mac_to_true, stable ("yes" when found, else "no").
+    zeta_identified, zeta_error_pct, mac_to_true, stable ("yes" when found, else "no"),
+    identified_mode (1-based number of the paired identified mode, NaN when not found).
     Identified modes paired with no true mode are added as rows with label "spurious".
     """
     f_true = np.asarray(f_true_hz, float)
@@ -201,6 +205,7 @@ def compare_to_truth(
                 "zeta_error_pct": 100 * (zi - zt[i]) / zt[i] if zt[i] else np.nan,
                 "mac_to_true": macs[i, j] if j is not None else np.nan,
                 "stable": "yes" if j is not None else "no",
+                "identified_mode": j + 1 if j is not None else np.nan,
             }
         )
     for j in range(f_id.size):
@@ -213,6 +218,7 @@ def compare_to_truth(
                     "f_identified_hz": f_id[j],
                     "zeta_identified": z_id[j],
                     "stable": "yes",
+                    "identified_mode": j + 1,
                 }
             )
     return pd.DataFrame(
@@ -228,6 +234,7 @@ def compare_to_truth(
             "zeta_error_pct",
             "mac_to_true",
             "stable",
+            "identified_mode",
         ],
     )
 

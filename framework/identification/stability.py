@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -132,45 +131,3 @@ def select_modes(
     shp = np.array(shapes).T if shapes else np.zeros((len(poles.output_labels), 0))
     return SelectedModes(table, shp, poles.output_labels)
 
-
-def plot_stability(
-    stability: pd.DataFrame,
-    path: str | Path,
-    selected: SelectedModes | None = None,
-    indicator: tuple[np.ndarray, np.ndarray] | None = None,
-    title: str = "",
-    f_max_hz: float | None = None,
-) -> Path:
-    """Stability diagram: poles (order vs frequency), stable ones filled; optional mode
-    indicator (frequency, values) such as the summed |FRF| on a log axis behind."""
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from framework.io import save_figure
-
-    fmax = f_max_hz or float(stability["frequency_hz"].max())
-    tab = stability[stability["frequency_hz"] <= fmax]
-    fig, ax = plt.subplots(figsize=(8, 5))
-    phys = tab[tab["physical"] & ~tab["stable"]]
-    ax.plot(phys["frequency_hz"], phys["order"], "o", ms=3, mfc="none", mec="0.6", label="new / unstable")
-    st = tab[tab["stable"]]
-    ax.plot(st["frequency_hz"], st["order"], "o", ms=3.5, color="C3", label="stable (f, MAC)")
-    if selected is not None:
-        for f in selected.table["frequency_hz"]:
-            ax.axvline(f, color="C0", lw=0.7, ls="--")
-    ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("model order")
-    ax.set_xlim(0, fmax)
-    if indicator is not None:
-        ax2 = ax.twinx()
-        fi, vi = indicator
-        sel = fi <= fmax
-        ax2.semilogy(fi[sel], vi[sel], color="0.3", lw=0.7)
-        ax2.set_ylabel("mode indicator (sum |H1|)")
-    ax.legend(loc="upper left", fontsize=8)
-    ax.set_title(title or "stability diagram")
-    fig.tight_layout()
-    return save_figure(fig, path, dpi=120, tight=False)
