@@ -400,7 +400,7 @@ def test_select_modes_is_one_based_and_strict(numbers, message):
 
 
 def test_repo_data_files_load_as_written():
-    files = sorted([*ROOT.glob("results/identification/*.yaml"), *ROOT.glob("studies/discrepancy_data/*.yaml")])
+    files = sorted([*ROOT.glob("results/identification/*_identified.yaml"), *ROOT.glob("studies/discrepancy_data/*.yaml")])
     assert len(files) >= 4
     for path in files:
         raw = yaml.safe_load(path.read_text())

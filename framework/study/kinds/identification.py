@@ -285,7 +285,7 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
     return parts
 
 
-def preflight(specs: list[dict]) -> None:
+def preflight(specs: list[dict], build_references: bool = True) -> None:
     """Channels named in ``peak_picking.frf_channels`` exist (InputError before any run)."""
     from framework.identification import campaign
 
