@@ -64,7 +64,7 @@ def test_model_is_picklable_and_updates_from_measured_data():
     truth = m.modal({"E": 2.4e11})
     data = MeasuredModes(truth.frequencies_hz[:2], tuple(DOFS), truth.shapes[:, :2])
     p = UpdatingProblem(m, data)
-    r = run_optimizer("sm", p, seed=0, budget=Budget(max_evaluations=60))
+    r = run_optimizer("sm", p, seed=0, budget=Budget(max_evaluations=60, target_objective=None))
     assert r.theta_best[0] == pytest.approx(2.4e11, rel=1e-4)
 
 
@@ -87,7 +87,7 @@ def test_failures_become_reasons_not_crashes():
     ev = p.evaluate(np.array([[0.5]]))
     assert not ev.ok[0] and ev.reasons[0] == "build_failed"
     assert ev.objective[0] == pytest.approx(p.spec.failure_penalty)
-    assert "section table missing" in p.log.failure_summary()
+    assert "section table missing" in ev.details[0]
     with pytest.raises(ModelEvaluationError, match="build_failed: ValueError: section table missing"):
         OpenSeesModel(_raising_build, PARAMS, {"a": (2, 1)}, n_modes=1).modal({})
 
@@ -99,7 +99,9 @@ def test_singular_model_fails_with_a_reason():
     ev = p.evaluate(np.array([[0.5], [0.6]]))
     assert not ev.ok.any()
     assert ev.reasons == ["eigen_failed", "eigen_failed"]
-    assert p.log.failures["eigen_failed"] == 2
+    r = run_optimizer("pso", p, seed=0, budget=Budget(max_evaluations=4), swarm_size=2)
+    assert r.status == "failed" and r.n_failed == 4 and "eigen_failed x4" in r.failures
+    assert np.isnan(r.objective) and np.isnan(r.theta_best).all()
 
 
 def test_unknown_direction_is_rejected():

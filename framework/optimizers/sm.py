@@ -8,8 +8,11 @@ forward-difference Jacobian ("2-point", step ``diff_step`` relative) and bounds 
 the normalized parameters, which keeps steps inside the physical box.
 
 Reported: iterations (Jacobian evaluations), every model evaluation including those of
-the Jacobian (counted by the problem), and the condition number of the sensitivity matrix
-J = dr/dx at the solution (normalized coordinates).
+the Jacobian (counted by the run's evaluator), and the condition number of the
+sensitivity matrix J = dr/dx at the solution (normalized coordinates). The shared
+termination rule is applied after every trust-region iteration (least_squares' callback,
+Pi = 2 cost), next to least_squares' own tolerances; the evaluation budget is enforced by
+the evaluator.
 
 Starts: "initial" (the initial model), "random" (uniform in the box from the run's
 generator), ``start_factor`` times the initial values (e.g. 0.92, 1.11), or an explicit
@@ -21,9 +24,9 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, field_validator
 
-from framework.optimizers.base import Budget, BudgetExhausted, OptimizerResult, Settings, Timer, make_result
+from framework.optimizers.base import Budget, BudgetExhausted, Outcome, Settings, Termination
 
 
 class SMSettings(Settings):
@@ -35,8 +38,14 @@ class SMSettings(Settings):
     xtol: float = Field(1e-10, gt=0)
     gtol: float = Field(1e-10, gt=0)
 
+    @field_validator("x0", mode="before")
+    @classmethod
+    def _array_to_list(cls, value):
+        return value.tolist() if isinstance(value, np.ndarray) else value
+
 
 def start_point(problem, seed: int, s: SMSettings) -> np.ndarray:
+    """The start in normalized coordinates; ``problem`` is anything with parameters and n_params."""
     if s.x0 is not None:
         x0 = np.asarray(s.x0, dtype=float)
         if x0.shape != (problem.n_params,) or not np.all(np.isfinite(x0)):
@@ -50,40 +59,43 @@ def start_point(problem, seed: int, s: SMSettings) -> np.ndarray:
     return problem.x_initial.copy()
 
 
-def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
+def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     from scipy.optimize import least_squares
 
     s = SMSettings(**settings)
-    x0 = start_point(problem, seed, s)
+    x0 = start_point(evaluator, seed, s)
+    termination = Termination(budget, evaluator)
 
-    def fun(x):
-        if problem.log.n_evaluations >= budget.max_evaluations:
-            raise BudgetExhausted
-        return problem.residuals(x)
+    def callback(intermediate_result):
+        if termination.update(2.0 * float(intermediate_result.cost)):
+            raise StopIteration
 
-    extra: dict = {"x_start": x0.tolist(), "theta_start": problem.parameters.to_physical(x0).tolist()}
-    with Timer() as timer:
-        try:
-            res = least_squares(
-                fun,
-                x0,
-                jac="2-point",
-                bounds=(0.0, 1.0),
-                method="trf",
-                diff_step=s.diff_step,
-                ftol=s.ftol,
-                xtol=s.xtol,
-                gtol=s.gtol,
-                max_nfev=budget.max_evaluations,
-            )
+    extra: dict = {"x_start": x0.tolist(), "theta_start": evaluator.parameters.to_physical(x0).tolist()}
+    try:
+        res = least_squares(
+            evaluator.residuals,
+            x0,
+            jac="2-point",
+            bounds=(0.0, 1.0),
+            method="trf",
+            diff_step=s.diff_step,
+            ftol=s.ftol,
+            xtol=s.xtol,
+            gtol=s.gtol,
+            max_nfev=budget.max_evaluations,
+            callback=callback,
+        )
+        if termination.reason is not None:
+            status = termination.reason
+        else:
             status = "converged" if res.status > 0 else "failed"
-            n_iter = int(res.njev)
-            message = str(res.message)
-            J = np.asarray(res.jac)
-            extra["condition_number"] = float(np.linalg.cond(J)) if J.size else float("nan")
-            extra["singular_values"] = np.linalg.svd(J, compute_uv=False).tolist() if J.size else []
-            if budget.target_objective is not None and 2 * res.cost < budget.target_objective:
-                status = "target"
-        except BudgetExhausted:
-            status, n_iter, message = "budget", 0, "evaluation budget exhausted"
-    return make_result("sm", problem, seed, timer.elapsed, status, n_iter, message=message, extra=extra)
+        n_iter = int(res.njev)
+        message = str(res.message)
+        J = np.asarray(res.jac)
+        extra["condition_number"] = float(np.linalg.cond(J)) if J.size else float("nan")
+        extra["singular_values"] = np.linalg.svd(J, compute_uv=False).tolist() if J.size else []
+        if status == "converged" and budget.target_objective is not None and 2 * res.cost < budget.target_objective:
+            status = "target"
+    except BudgetExhausted:
+        status, n_iter, message = "budget", 0, "evaluation budget exhausted"
+    return Outcome(status, n_iter, message=message, extra=extra)

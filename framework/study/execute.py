@@ -26,7 +26,7 @@ from framework.errors import ModelEvaluationError
 from framework.measurements import MeasuredModes
 from framework.measurements import load as load_measured
 from framework.models.registry import builtin_measured, make_structure
-from framework.objectives import ObjectiveSpec, RatioConstraint
+from framework.objectives import ObjectiveSpec
 from framework.optimizers import Budget, run_optimizer
 from framework.parameters import ParameterSet
 from framework.problem import UpdatingProblem
@@ -48,9 +48,7 @@ def measured_from(cfg: dict) -> MeasuredModes:
 
 
 def objective_from(cfg: dict) -> ObjectiveSpec:
-    data = dict(cfg)
-    data["ratio_constraints"] = tuple(RatioConstraint(**c) for c in data.get("ratio_constraints", []))
-    return ObjectiveSpec(**data)
+    return ObjectiveSpec(**cfg)
 
 
 def parameters_from(model, cfg: dict) -> ParameterSet:
@@ -63,7 +61,7 @@ def parameters_from(model, cfg: dict) -> ParameterSet:
 
 
 def build_problem(
-    config: dict, runner=None, structure_options: dict | None = None, measured_cfg: dict | None = None
+    config: dict, structure_options: dict | None = None, measured_cfg: dict | None = None
 ) -> UpdatingProblem:
     """The updating problem described by a (resolved) config dict."""
     options = {**config["structure"]["options"], **(structure_options or {})}
@@ -74,7 +72,6 @@ def build_problem(
         measured,
         parameters_from(model, config["parameters"]),
         objective_from(config["objective"]),
-        runner=runner,
     )
 
 
@@ -92,7 +89,8 @@ def _evaluation_bar(spec: dict, config: dict):
 def _history_rows(base: dict, history: np.ndarray) -> list[dict]:
     if history.size == 0:
         return []
-    keep = np.flatnonzero(np.r_[True, np.diff(history) < 0])
+    known = np.where(np.isnan(history), np.inf, history)  # NaN: no successful evaluation yet
+    keep = np.flatnonzero(np.r_[True, known[1:] < known[:-1]])
     if keep[-1] != history.size - 1:
         keep = np.r_[keep, history.size - 1]
     return [{**base, "evaluation": int(i + 1), "best_objective": float(history[i])} for i in keep]
@@ -178,14 +176,13 @@ def _execute(spec: dict, config: dict, runner) -> dict[str, list[dict]]:
     structure = config["structure"]["name"]
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
     try:
-        problem = build_problem(config, runner=runner)
+        problem = build_problem(config)
         bar = _evaluation_bar(spec, config)
-        if bar is not None:
-            problem.log.on_record = bar.update
         try:
             result = run_optimizer(
-                spec["algorithm"], problem, spec["seed"], Budget(**spec["budget"]), **spec["settings"]
-            )
+                spec["algorithm"], problem, spec["seed"], Budget(**spec["budget"]),
+                runner=runner, progress=bar.update if bar is not None else None, **spec["settings"],
+            )  # fmt: skip
         finally:
             if bar is not None:
                 bar.close()
@@ -226,6 +223,10 @@ def _execute(spec: dict, config: dict, runner) -> dict[str, list[dict]]:
                 "normalized": float(x),
             }
         )
+    tables["history"] = _history_rows(base, result.history)
+    tables["extra"] = _extra_rows(base, result.extra)
+    if result.status == "failed":  # every evaluation failed: no updated parameters to predict with
+        return tables
     tables["modes"] += _mode_rows(base, "base", problem, result.theta_best)
     theta = params.as_dict(result.theta_best)
     for case in config.get("validation", []):
@@ -238,8 +239,6 @@ def _execute(spec: dict, config: dict, runner) -> dict[str, list[dict]]:
             tables["modes"].append(
                 {**base, "case": case["case"], "mode": 0, "error": f"{type(exc).__name__}: {exc}"}
             )
-    tables["history"] = _history_rows(base, result.history)
-    tables["extra"] = _extra_rows(base, result.extra)
     return tables
 
 
