@@ -16,7 +16,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import logging
 import multiprocessing as mp
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 from framework.errors import ModelEvaluationError
 from framework.models.base import modal_many
@@ -190,7 +190,3 @@ class DaskRunner:
 
         with worker_client() as client:
             return self._run(client, model, thetas)
-
-
-def iter_items(items: Iterable) -> list:
-    return list(items)

@@ -69,18 +69,3 @@ def jumping(
         x[k : k + nc] += peak * rng.uniform(0.5, 1.0) * pulse
         t += 1.0 / rng.uniform(*rate_hz)
     return x
-
-
-def white_noise(duration_s: float, sampling_hz: float, rng: np.random.Generator, std: float = 1.0) -> np.ndarray:
-    """Gaussian white noise of standard deviation ``std``."""
-    return std * rng.standard_normal(_n_samples(duration_s, sampling_hz))
-
-
-def time_vector(n_samples: int, sampling_hz: float) -> np.ndarray:
-    """t_k = k / fs."""
-    return np.arange(n_samples) / float(sampling_hz)
-
-
-def sweep_rate_hz_per_s(duration_s: float, f_start_hz: float, f_end_hz: float) -> float:
-    """Linear sweep rate (f1 - f0) / T."""
-    return (f_end_hz - f_start_hz) / duration_s
