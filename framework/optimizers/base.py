@@ -45,7 +45,13 @@ class Settings(BaseModel):
 
 @dataclass
 class OptimizerResult:
-    """Outcome of one optimizer run (x in [0, 1]^k, theta in physical units)."""
+    """Outcome of one optimizer run (x in [0, 1]^k, theta in physical units).
+
+    n_evaluations counts model evaluations (a two-state point counts 2); history is the
+    best successful objective after each of them (NaN before the first success); extra is
+    plain JSON data. status "failed": no evaluation succeeded, and x_best, theta_best and
+    objective are NaN.
+    """
 
     algorithm: str
     seed: int
