@@ -224,6 +224,8 @@ def test_a_failed_point_is_never_the_result_even_with_a_tiny_penalty(algorithm):
     assert r.theta_best[problem.parameters.names.index("kxx")] <= limit
     assert problem.evaluate(r.x_best[None, :]).ok[0]
     assert r.objective > 1e-9
+    # the failed points' Pi (1e-9) is below the target (1e-6); only a successful point may meet it
+    assert r.status != "target"
 
 
 # ---- objective schema and formulations --------------------------------------------------------------

@@ -57,8 +57,8 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     termination = Termination(budget, evaluator, rules=("target",))
     max_iterations = min(s.max_iterations, budget.max_iterations or s.max_iterations)
 
-    def callback(x, f, context):
-        return termination.update(f) is not None
+    def callback(x, f, context):  # a new best point; a failed one never meets the target
+        return not evaluator.is_failed(x) and termination.update(f) is not None
 
     status, n_iter = "budget", 0
     try:

@@ -103,7 +103,8 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     while termination.affords(s.pop_size):
         algorithm.next()
         generation += 1
-        if termination.update(float(algorithm.opt[0].F[0])):
+        # best so far over successful evaluations (= the elitist population's best without failures)
+        if termination.update(evaluator.best_objective):
             break
     return Outcome(
         termination.status,

@@ -96,7 +96,9 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
             swarm.pbest_pos, swarm.pbest_cost = compute_pbest(swarm)
             swarm.best_pos, swarm.best_cost = topology.compute_gbest(swarm)
             iteration += 1
-            if termination.update(float(swarm.best_cost)):
+            # the global best so far, over successful evaluations only (= swarm.best_cost
+            # without failures): a failed point's penalty never meets the target
+            if termination.update(evaluator.best_objective):
                 break
             swarm.velocity = topology.compute_velocity(swarm, clamp, vh, bounds)
             swarm.position = topology.compute_position(swarm, bounds, bh)

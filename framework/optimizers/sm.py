@@ -14,6 +14,10 @@ termination rule is applied after every trust-region iteration (least_squares' c
 Pi = 2 cost), next to least_squares' own tolerances; the evaluation budget is enforced by
 the evaluator.
 
+Status: "converged" (least squares' tolerances), "target", "stalled", "max_iterations",
+"budget", or "not_converged" (least squares gave up, or its last iterate is a failed
+evaluation); "failed" is left to runs without any successful evaluation.
+
 Starts: "initial" (the initial model), "random" (uniform in the box from the run's
 generator), ``start_factor`` times the initial values (e.g. 0.92, 1.11), or an explicit
 normalized point ``x0`` (e.g. to polish the result of a global search).
@@ -67,7 +71,11 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     termination = Termination(budget, evaluator)
 
     def callback(intermediate_result):
-        if termination.update(2.0 * float(intermediate_result.cost)):
+        # Pi of the current iterate (2 x cost), unless that point failed
+        value = 2.0 * float(intermediate_result.cost)
+        if evaluator.is_failed(intermediate_result.x):
+            value = evaluator.best_objective
+        if termination.update(value):
             raise StopIteration
 
     extra: dict = {"x_start": x0.tolist(), "theta_start": evaluator.parameters.to_physical(x0).tolist()}
@@ -87,8 +95,10 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         )
         if termination.reason is not None:
             status = termination.reason
+        elif res.status <= 0 or evaluator.is_failed(res.x):
+            status = "not_converged"  # least squares gave up, or stopped on a failed point
         else:
-            status = "converged" if res.status > 0 else "failed"
+            status = "converged"
         n_iter = int(res.njev)
         message = str(res.message)
         J = np.asarray(res.jac)
