@@ -22,9 +22,9 @@ from framework.problem import UpdatingProblem
 DATA = {"lab_frame_3dof": "lab_frame", "lab_frame_detailed": "lab_frame", "bridge": "bridge", "beam": "beam"}
 
 
-def _problem(structure: str, runner=None) -> UpdatingProblem:
+def _problem(structure: str) -> UpdatingProblem:
     model = make_structure(structure)
-    return UpdatingProblem(model, builtin_measured(DATA.get(structure, structure)), runner=runner)
+    return UpdatingProblem(model, builtin_measured(DATA.get(structure, structure)))
 
 
 def _rate(fn, n: int, repeats: int) -> float:
@@ -50,14 +50,13 @@ def population_speedup(structure: str, n_points: int, workers: int = 2, repeats:
     """Population of n points in one call: one process vs ``workers`` processes (ProcessRunner)."""
     from framework.parallel import ProcessRunner
 
-    X = np.random.default_rng(1).random((n_points, _problem(structure).n_params))
-    serial = _problem(structure)
-    one = _rate(lambda: serial.objective(X), n_points, repeats)
+    problem = _problem(structure)
+    X = np.random.default_rng(1).random((n_points, problem.n_params))
+    one = _rate(lambda: problem.objective(X), n_points, repeats)
     runner = ProcessRunner(workers)
     try:
-        parallel = _problem(structure, runner=runner)
-        parallel.objective(X[:workers])  # start the pool outside the timing
-        many = _rate(lambda: parallel.objective(X), n_points, repeats)
+        problem.objective(X[:workers], runner)  # start the pool outside the timing
+        many = _rate(lambda: problem.objective(X, runner), n_points, repeats)
     finally:
         runner.close()
     return {"structure": structure, "points": n_points, "workers": workers, "serial_eval_per_s": one,

@@ -20,10 +20,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-#: MAC above which modes are called well correlated, below which uncorrelated (SPEC 2).
-MAC_WELL_CORRELATED = 0.9
-MAC_UNCORRELATED = 0.05
-
 
 def _as_modes(phi, name: str) -> np.ndarray:
     arr = np.asarray(phi)

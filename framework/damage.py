@@ -1,5 +1,6 @@
 """Damage estimation helpers (SPEC 7): simulated noisy measurements, damage index, detection,
-L-curve corner for Tikhonov regularization, and a two-state composite problem for NSGA-II.
+L-curve corner for Tikhonov regularization, the two-state transform of two problems
+(NSGA-II on both states at once) and the least-squares polish of a global search's result.
 
 - Shape noise:    phi_jk,measured = phi_jk (1 + a eps_jk), eps_jk ~ U[-1, 1] drawn from
                   ``np.random.default_rng(seed)``, one draw (n_dof, m) per seed;
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -21,7 +23,7 @@ from framework.errors import InputError
 from framework.measurements import MeasuredModes
 from framework.models.base import ModalResult
 from framework.parameters import Parameter, ParameterSet
-from framework.problem import EvaluationLog
+from framework.problem import Evaluations, as_points
 
 log = logging.getLogger(__name__)
 
@@ -128,43 +130,35 @@ def lcurve_corner(fit_norm: Sequence[float], solution_norm: Sequence[float]) -> 
 
 
 # ---- two damage states at once -------------------------------------------------------------
-class TwoStateProblem:
-    """Composite problem of two states: x = [x_state1 (k), x_state2 (k)], objectives [Pi_1, Pi_2].
+@dataclass(frozen=True)
+class TwoState:
+    """Transform of two states' problems into one: x = [x_state1 (k), x_state2 (k)].
 
-    ``objective(X)`` is Pi_1 + Pi_2 (for single-objective optimizers), ``objectives(X)``
-    the (n, 2) matrix for NSGA-II. One evaluation of the composite counts one evaluation
-    of each state's problem (two model runs); ``n_evaluations`` and ``log`` (an
-    :class:`~framework.problem.EvaluationLog` of Pi_1 + Pi_2, used by the optimizer
-    adapters) count composite points. Failures are counted by each state's own problem.
+    ``evaluate(X, runner)`` returns objective Pi_1 + Pi_2, residuals [r_1, r_2] (their sum
+    of squares is Pi_1 + Pi_2) and objectives [Pi_1, Pi_2] (NSGA-II). A point fails if
+    either state fails (its reason is the first state's failure). One point runs the
+    model twice, so it counts as ``evaluations_per_point = 2`` model evaluations: a run's
+    ``n_evaluations`` and budget are in model evaluations.
     """
 
-    def __init__(self, problem1, problem2, prefixes: tuple[str, str] = ("s1_", "s2_")):
-        if len(problem1.parameters) != len(problem2.parameters):
-            raise InputError(
-                f"the two states must have the same number of parameters, got "
-                f"{len(problem1.parameters)} and {len(problem2.parameters)}"
-            )
-        self.problems = (problem1, problem2)
-        self.k = len(problem1.parameters)
-        self.parameters = ParameterSet(
-            Parameter(prefix + p.name, p.initial, p.lower, p.upper, p.unit, p.description)
-            for prefix, prob in zip(prefixes, self.problems)
-            for p in prob.parameters
-        )
-        self.name = "two_state"
-        self.log = EvaluationLog()
+    problem1: object
+    problem2: object
+    parameters: ParameterSet
+    name: str = "two_state"
+    evaluations_per_point = 2
+    n_objectives = 2
+
+    @property
+    def problems(self) -> tuple:
+        return (self.problem1, self.problem2)
+
+    @property
+    def k(self) -> int:
+        return len(self.problem1.parameters)
 
     @property
     def n_params(self) -> int:
         return 2 * self.k
-
-    @property
-    def n_objectives(self) -> int:
-        return 2
-
-    @property
-    def n_evaluations(self) -> int:
-        return self.log.n_evaluations
 
     @property
     def x_initial(self) -> np.ndarray:
@@ -173,53 +167,55 @@ class TwoStateProblem:
     def theta(self, x: np.ndarray) -> np.ndarray:
         return self.parameters.to_physical(x)
 
-    def reset(self) -> None:
-        self.log = EvaluationLog()
-        for p in self.problems:
-            p.reset()
+    def evaluate(self, X: np.ndarray, runner=None) -> Evaluations:
+        X = as_points(X, self.n_params)
+        e1 = self.problem1.evaluate(X[:, : self.k], runner)
+        e2 = self.problem2.evaluate(X[:, self.k :], runner)
+        ok = e1.ok & e2.ok
+        reasons = [r1 if r1 is not None else r2 for r1, r2 in zip(e1.reasons, e2.reasons)]
+        details = [
+            "; ".join(f"state {j + 1}: {d}" for j, d in enumerate(pair) if d) for pair in zip(e1.details, e2.details)
+        ]
+        return Evaluations(
+            objective=e1.objective + e2.objective,
+            residuals=np.concatenate([e1.residuals, e2.residuals], axis=1),
+            objectives=np.column_stack([e1.objective, e2.objective]),
+            ok=ok,
+            reasons=reasons,
+            details=details,
+            correlations=list(zip(e1.correlations, e2.correlations)),
+        )
 
-    def objectives(self, X: np.ndarray) -> np.ndarray:
-        """(n, 2): [Pi_state1(X[:, :k]), Pi_state2(X[:, k:])]."""
-        X = np.atleast_2d(np.asarray(X, dtype=float))
-        if X.shape[1] != 2 * self.k:
-            raise ValueError(f"points have {X.shape[1]} coordinates, two-state problem has {2 * self.k}")
-        F = np.column_stack([self.problems[0].objective(X[:, : self.k]), self.problems[1].objective(X[:, self.k :])])
-        total = F.sum(axis=1)
-        self.log.record(X, total, [None] * len(total), [""] * len(total))
-        return F
 
-    def objective(self, X: np.ndarray) -> np.ndarray:
-        """Pi_1 + Pi_2 per point."""
-        return self.objectives(X).sum(axis=1)
-
-    def objective1(self, x: np.ndarray) -> float:
-        return float(self.objective(np.asarray(x)[None, :])[0])
-
-    def residuals(self, x: np.ndarray) -> np.ndarray:
-        """Concatenated residual vectors of both states (sum of squares = Pi_1 + Pi_2)."""
-        x = np.asarray(x, dtype=float)
-        r1 = self.problems[0].residuals(x[: self.k])
-        r2 = self.problems[1].residuals(x[self.k :])
-        r = np.concatenate([r1, r2])
-        self.log.record(x[None, :], np.array([np.sum(r**2)]), [None], [""])
-        return r
+def two_state(problem1, problem2, prefixes: tuple[str, str] = ("s1_", "s2_")) -> TwoState:
+    """The two-state problem of two states' problems with equally many parameters."""
+    if len(problem1.parameters) != len(problem2.parameters):
+        raise InputError(
+            f"the two states must have the same number of parameters, got "
+            f"{len(problem1.parameters)} and {len(problem2.parameters)}"
+        )
+    parameters = ParameterSet(
+        Parameter(prefix + p.name, p.initial, p.lower, p.upper, p.unit, p.description)
+        for prefix, prob in zip(prefixes, (problem1, problem2))
+        for p in prob.parameters
+    )
+    return TwoState(problem1, problem2, parameters)
 
 
 # ---- local refinement ---------------------------------------------------------------------
-def polish(problem, x0: np.ndarray, max_evaluations: int = 3000, diff_step: float = 1e-6) -> np.ndarray:
-    """Refine x0 by trust-region least squares on ``problem.residuals`` within [0, 1]^k.
+def polish(problem, x0: np.ndarray, max_evaluations: int = 3000, diff_step: float = 1e-6, runner=None):
+    """Refine x0 by the sensitivity method started there: ``run_optimizer("sm", x0=x0)``.
 
-    The sensitivity method's iteration (scipy ``least_squares``, forward differences)
-    started from a given point, used as the hybrid step after a global search (like
-    MATLAB's ``HybridFcn``); the evaluations are counted by the problem. Returns the
-    refined x, or x0 if the refinement made Pi worse.
+    The hybrid step after a global search (like MATLAB's ``HybridFcn``): trust-region least
+    squares on the residuals within [0, 1]^k, tolerances 1e-12, every model evaluation
+    (Jacobian included) counted and limited to ``max_evaluations``; only least-squares'
+    own tolerances stop it (no stall or target rule). Returns the OptimizerResult, whose
+    ``x_best`` is the best successful point evaluated, so never worse than x0 (evaluated first).
     """
-    from scipy.optimize import least_squares
+    from framework.optimizers import Budget, run_optimizer
 
     x0 = np.clip(np.asarray(x0, dtype=float), 0.0, 1.0)
-    res = least_squares(
-        problem.residuals, x0, jac="2-point", bounds=(0.0, 1.0), method="trf", diff_step=diff_step,
-        ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=max_evaluations,
-    )  # fmt: skip
-    before = float(np.sum(problem.residuals(x0) ** 2))
-    return res.x if 2.0 * res.cost <= before else x0
+    budget = Budget(max_evaluations=max_evaluations, target_objective=None, stall_tolerance=0.0)
+    return run_optimizer(
+        "sm", problem, 0, budget, runner=runner, x0=x0.tolist(), diff_step=diff_step, ftol=1e-12, xtol=1e-12, gtol=1e-12
+    )

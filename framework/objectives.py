@@ -21,15 +21,30 @@ objective vector [Pi_f, Pi_MAC] (NSGA-II) are three views of one definition.
                      ("ratio") or normalized to their bounds ("normalized")  (Tikhonov)
 
 A formulation maps (modal result, measured modes, spec) to residuals; "spec" is the one
-above. Other formulations (e.g. a peer package's) register in ``FORMULATIONS``.
+above. Every formulation is named in the static table ``FORMULATIONS`` (name ->
+"module:attribute", resolved on use); a new one is one line there.
 """
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    StrictBool,
+    StrictStr,
+    ValidationError,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from framework.correlation import pair_modes
 from framework.errors import InputError
@@ -38,55 +53,115 @@ from framework.models.base import ModalResult
 from framework.parameters import ParameterSet
 
 
-@dataclass(frozen=True)
-class RatioConstraint:
+def _no_bool(value):
+    """Reject booleans where a number is expected (pydantic would read True as 1.0)."""
+    if isinstance(value, bool):
+        raise ValueError(f"expected a number, got {value!r}")
+    return value
+
+
+Number = Annotated[float, BeforeValidator(_no_bool)]
+
+
+class _Frozen(BaseModel):
+    """Frozen pydantic model that accepts positional fields and raises InputError naming the field.
+
+    Nested in a config, pydantic validates it directly (a ``ValidationError`` whose location
+    names the field); constructed in Python (``ObjectiveSpec(alpha=...)``) a bad value raises
+    :class:`~framework.errors.InputError` "objective.<field>: <message> (value ...)".
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+    _where: ClassVar[str] = "objective"
+
+    def __init__(self, *args, **kwargs):
+        names = list(type(self).model_fields)
+        if len(args) > len(names):
+            raise InputError(f"{self._where}: at most {len(names)} positional values, got {len(args)}")
+        for name, value in zip(names, args):
+            if name in kwargs:
+                raise InputError(f"{self._where}.{name}: given twice")
+            kwargs[name] = value
+        try:
+            super().__init__(**kwargs)
+        except ValidationError as exc:
+            raise InputError(validation_message(exc, self._where)) from None
+
+    # pydantic calls a custom __init__ also when it validates the model nested in another
+    # (a config); this flag keeps nested validation on pydantic's own path, so that a
+    # config error stays a ValidationError located at its field
+    __init__.__pydantic_base_init__ = True  # type: ignore[attr-defined]
+
+
+def validation_message(exc: ValidationError, where: str) -> str:
+    """One line naming the field, the problem and the value of a pydantic error."""
+    first = exc.errors()[0]
+    loc = ".".join(str(p) for p in (where, *first["loc"]) if p != "")
+    msg = "unknown key" if first["type"] == "extra_forbidden" else first["msg"].removeprefix("Value error, ")
+    if not first["loc"]:  # a rule over several fields: the input is the whole mapping
+        return f"{loc}: {msg}"
+    return f"{loc}: {msg} (value {first.get('input')!r})"
+
+
+class RatioConstraint(_Frozen):
     """Soft constraint w |theta_a/theta_b - theta_a,0/theta_b,0| (SPEC 3, bridge: w = 2e-4)."""
+
+    _where: ClassVar[str] = "objective.ratio_constraints"
 
     numerator: str
     denominator: str
-    weight: float = 2e-4
+    weight: Number = Field(2e-4, ge=0, allow_inf_nan=False)
 
 
-@dataclass(frozen=True)
-class ObjectiveSpec:
-    """Settings of the objective. alpha/beta weight the frequency and MAC terms.
+class ObjectiveSpec(_Frozen):
+    """Settings of the objective, and the config schema of ``objective:``.
 
+    alpha/beta weight the frequency and MAC terms (not both 0: Pi would be identically 0).
     pairing: "mac" (highest MAC, one-to-one), "order" or "frequency"; mac_threshold: a
     pair below it is unmatched; frequency_window: relative window for MAC pairing
-    (None = any); use_shapes: include the MAC term (needs measured shapes).
+    (None = any); use_shapes: include the MAC term (needs measured shapes);
+    unmatched_penalty: Pi added per unmatched mode; failure_penalty (> 0): Pi of a failed
+    evaluation; ratio_constraints, regularization_tau (Tikhonov weight) and
+    regularization_space ("ratio" or "normalized"): penalty terms; formulation: a name of
+    :data:`FORMULATIONS`, whose ``options`` are checked here.
     """
 
-    alpha: float = 1.0
-    beta: float = 1.0
-    use_shapes: bool = True
-    pairing: str = "mac"
-    mac_threshold: float = 0.5
-    frequency_window: float | None = None
-    unmatched_penalty: float = 1.0
-    failure_penalty: float = 1e3
+    alpha: Number = Field(1.0, ge=0, allow_inf_nan=False)
+    beta: Number = Field(1.0, ge=0, allow_inf_nan=False)
+    use_shapes: StrictBool = True
+    pairing: Literal["mac", "order", "frequency"] = "mac"
+    mac_threshold: Number = Field(0.5, ge=0, le=1)
+    frequency_window: Number | None = Field(None, gt=0, allow_inf_nan=False)
+    unmatched_penalty: Number = Field(1.0, ge=0, allow_inf_nan=False)
+    failure_penalty: Number = Field(1e3, gt=0, allow_inf_nan=False)
     ratio_constraints: tuple[RatioConstraint, ...] = ()
-    regularization_tau: float = 0.0
-    regularization_space: str = "ratio"
-    formulation: str = "spec"
-    options: dict = field(default_factory=dict)
+    regularization_tau: Number = Field(0.0, ge=0, allow_inf_nan=False)
+    regularization_space: Literal["ratio", "normalized"] = "ratio"
+    formulation: StrictStr = "spec"
+    options: dict[str, Any] = Field(default_factory=dict)
 
-    def __post_init__(self) -> None:
-        for name in ("alpha", "beta", "unmatched_penalty", "failure_penalty", "regularization_tau"):
-            value = getattr(self, name)
-            if not np.isfinite(value) or value < 0:
-                raise InputError(f"objective.{name} must be a finite number >= 0, got {value!r}")
-        if self.pairing not in ("mac", "order", "frequency"):
-            raise InputError(f"objective.pairing must be 'mac', 'order' or 'frequency', got {self.pairing!r}")
-        if not 0.0 <= self.mac_threshold <= 1.0:
-            raise InputError(f"objective.mac_threshold must be in [0, 1], got {self.mac_threshold!r}")
-        if self.regularization_space not in ("ratio", "normalized"):
-            raise InputError(
-                f"objective.regularization_space must be 'ratio' or 'normalized', got {self.regularization_space!r}"
-            )
-        if self.formulation not in FORMULATIONS:
-            raise InputError(
-                f"objective.formulation {self.formulation!r} unknown; known: {sorted(FORMULATIONS)}"
-            )
+    @field_validator("formulation")
+    @classmethod
+    def _known_formulation(cls, name: str) -> str:
+        if name not in FORMULATIONS:
+            raise ValueError(f"unknown formulation {name!r}; known: {sorted(FORMULATIONS)}")
+        return name
+
+    @field_validator("options")
+    @classmethod
+    def _formulation_options(cls, options: dict, info: ValidationInfo) -> dict:
+        name = info.data.get("formulation")
+        if name is not None:  # else the formulation itself was rejected
+            check = get_formulation(name).check_options
+            if check is not None:
+                check(options)
+        return options
+
+    @model_validator(mode="after")
+    def _not_identically_zero(self):
+        if self.alpha == 0 and self.beta == 0:
+            raise ValueError("alpha and beta are both 0: the objective would be identically 0")
+        return self
 
 
 @dataclass(frozen=True)
@@ -222,36 +297,28 @@ class Formulation:
     objective_names: tuple[str, ...] = ("Pi_f", "Pi_MAC")
     #: optional vectorized residuals(freqs (n, m), shapes (n, dof, m), measured, spec)
     batch_residuals: Callable | None = None
+    #: optional check of ``ObjectiveSpec.options`` (raises ValueError naming the key); None:
+    #: the formulation reads no options
+    check_options: Callable[[dict], None] | None = None
 
 
-FORMULATIONS: dict[str, Formulation] = {
-    "spec": Formulation(spec_residuals, spec_n_residuals, spec_split, batch_residuals=spec_residuals_batch),
-}
+SPEC_FORMULATION = Formulation(spec_residuals, spec_n_residuals, spec_split, batch_residuals=spec_residuals_batch)
 
-
-#: Formulations defined in other modules, imported on first use: name -> "module:attribute".
-LAZY_FORMULATIONS: dict[str, str] = {
+#: Every selectable formulation: name -> "module:attribute", imported when first used, so
+#: that which names are valid never depends on which modules happen to be imported.
+FORMULATIONS: dict[str, str] = {
+    "spec": "framework.objectives:SPEC_FORMULATION",
     "reference": "framework.reference_formulation:FORMULATION",
     "gaussian": "framework.discrepancy.likelihood:FORMULATION",
 }
 
 
 def get_formulation(name: str) -> Formulation:
-    """The formulation called ``name`` (built-in, registered, or lazily imported)."""
-    if name not in FORMULATIONS and name in LAZY_FORMULATIONS:
-        import importlib
-
-        module, attr = LAZY_FORMULATIONS[name].split(":")
-        FORMULATIONS[name] = getattr(importlib.import_module(module), attr)
+    """The formulation called ``name`` (one of :data:`FORMULATIONS`)."""
     if name not in FORMULATIONS:
-        known = sorted(set(FORMULATIONS) | set(LAZY_FORMULATIONS))
-        raise InputError(f"objective.formulation {name!r} unknown; known: {known}")
-    return FORMULATIONS[name]
-
-
-def register_formulation(name: str, formulation: Formulation) -> None:
-    """Make a residual formulation selectable as ObjectiveSpec(formulation=name)."""
-    FORMULATIONS[name] = formulation
+        raise InputError(f"objective.formulation {name!r} unknown; known: {sorted(FORMULATIONS)}")
+    module, attr = FORMULATIONS[name].split(":")
+    return getattr(importlib.import_module(module), attr)
 
 
 def penalty_residuals(

@@ -7,7 +7,7 @@ clusters are started with ``threads_per_worker=1``.
 - ``map_unordered(fn, items, backend, workers, scheduler)`` yields (index, result) as
   items finish: used by the study runner for whole runs.
 - ``ProcessRunner`` / ``DaskRunner`` evaluate a population of parameter points of one run
-  in parallel; pass one as ``UpdatingProblem(..., runner=...)``. Results come back in
+  in parallel; pass one as ``run_optimizer(..., runner=...)`` or ``problem.evaluate(X, runner)``. Results come back in
   input order, so a run gives the same numbers with any runner.
 - ``make_evaluation_runner(backend, workers, isolate, timeout_s, ...)`` picks the runner of a
   run's evaluations and returns (runner, close).
@@ -26,7 +26,7 @@ import logging
 import multiprocessing as mp
 import os
 import threading
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 from framework.errors import ModelEvaluationError
 from framework.isolation import IsolatedRunner, guard_parent_death
@@ -259,7 +259,3 @@ def make_evaluation_runner(
         raise ValueError("evaluation backend dask needs a scheduler address outside a Dask worker")
     own = Client(scheduler)
     return DaskRunner(own, **options), own.close
-
-
-def iter_items(items: Iterable) -> list:
-    return list(items)

@@ -1,21 +1,29 @@
 """The updating problem: normalized x in [0, 1]^k -> physical theta -> model -> objective.
 
-One definition, three views: ``objective(X)`` (scalar, for PSO/GA/annealing),
-``residuals(x)`` (vector, for least squares / the sensitivity method) and
-``objectives(X)`` (vector of objectives, for NSGA-II). Every model evaluation, including
-those spent on finite-difference Jacobians, is counted and logged with its objective; a
+An :class:`UpdatingProblem` is a frozen description (model, measured modes, parameters,
+objective spec) with one pure function, ``evaluate(X, runner=None) -> Evaluations``,
+that returns every view of one definition for n points: the scalar objective Pi (n,)
+(PSO/GA/annealing), the residual vectors (n, r) whose sums of squares are Pi (least
+squares / the sensitivity method) and the objective vectors (n, n_obj) (NSGA-II). A
 failed evaluation becomes the documented penalty (see :mod:`framework.objectives`) and
-its reason is recorded.
+carries its reason. Nothing is counted or remembered here: the evaluation count, the best
+point, the history, the failures and the budget of one optimizer run belong to the
+per-run :class:`~framework.evaluator.Evaluator` that ``run_optimizer`` creates.
 
 The model is evaluated through a *runner* ``runner(model, thetas) -> list`` (serial by
-default; process pools and Dask in :mod:`framework.parallel`), so parallelism is plugged
-in from outside and the problem itself stays a plain, picklable description.
+default; process pools and Dask in :mod:`framework.parallel`), passed per call: how the
+model is evaluated is an execution detail, not part of the problem, which stays a plain,
+picklable description.
+
+Problem transforms (two damage states at once, :func:`framework.damage.two_state`; the
+SNT derated objective, :func:`framework.optimizers.niching.derated`) follow the same
+protocol: ``parameters``, ``n_params``, ``n_objectives``, ``x_initial``,
+``evaluations_per_point`` (model evaluations per point) and ``evaluate(X, runner=None)``.
 """
 
 from __future__ import annotations
 
 import logging
-from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -33,6 +41,7 @@ from framework.objectives import (
     get_formulation,
     n_penalty_residuals,
     penalty_residuals,
+    use_shape_term,
 )
 from framework.parameters import ParameterSet
 
@@ -41,58 +50,49 @@ log = logging.getLogger(__name__)
 Runner = Callable[[StructuralModel, Sequence[dict]], list]
 
 
-@dataclass
+@dataclass(frozen=True)
 class Evaluations:
-    """Result of evaluating n points: objective (n,), residuals (n, r), ok (n,), reasons."""
+    """Every view of n evaluated points.
+
+    objective (n,): Pi = sum of squared residuals; residuals (n, r); objectives
+    (n, n_obj): the split view (penalty terms added to each objective, failed rows =
+    failure_penalty); ok (n,): the evaluation succeeded; reasons / details: failure
+    category and message per point (None / "" when ok); correlations: per point mode
+    pairing (None when failed). ``source``: for a transform that changes the objective
+    (the SNT derating), the evaluations of the untransformed problem, else None.
+    """
 
     objective: np.ndarray
     residuals: np.ndarray
+    objectives: np.ndarray
     ok: np.ndarray
     reasons: list[str | None]
-    correlations: list[ModeCorrelation | None]
+    details: list[str]
+    correlations: list
+    source: Evaluations | None = None
+
+    def __len__(self) -> int:
+        return len(self.objective)
 
 
-class EvaluationLog:
-    """Counts evaluations and keeps the objective of each, in order, plus failure reasons."""
-
-    def __init__(self) -> None:
-        self.objectives: list[float] = []
-        self.failures: Counter[str] = Counter()
-        self.failure_examples: dict[str, str] = {}
-        self.best_x: np.ndarray | None = None
-        self.best_objective = np.inf
-        self.on_record = None  # optional callback(n_new_evaluations), e.g. a progress bar
-
-    @property
-    def n_evaluations(self) -> int:
-        return len(self.objectives)
-
-    @property
-    def n_failed(self) -> int:
-        return sum(self.failures.values())
-
-    def record(self, X: np.ndarray, objective: np.ndarray, reasons: list[str | None], details: list[str]) -> None:
-        self.objectives.extend(float(v) for v in objective)
-        for reason, detail in zip(reasons, details):
-            if reason is not None:
-                self.failures[reason] += 1
-                self.failure_examples.setdefault(reason, detail)
-        i = int(np.argmin(objective)) if len(objective) else -1
-        if i >= 0 and objective[i] < self.best_objective:
-            self.best_objective = float(objective[i])
-            self.best_x = np.array(X[i], dtype=float)
-        if self.on_record is not None:
-            self.on_record(len(objective))
-
-    def best_so_far(self) -> np.ndarray:
-        return np.minimum.accumulate(np.asarray(self.objectives)) if self.objectives else np.array([])
-
-    def failure_summary(self) -> str:
-        return "; ".join(f"{k} x{v} ({self.failure_examples[k]})" for k, v in sorted(self.failures.items()))
+def as_points(X, n_params: int) -> np.ndarray:
+    """X as an (n, k) float array clipped to [0, 1]; a wrong width or a NaN raises ValueError."""
+    X = np.atleast_2d(np.asarray(X, dtype=float))
+    if X.ndim != 2 or X.shape[1] != n_params:
+        raise ValueError(f"points have {X.shape[-1]} coordinates, problem has {n_params} parameters")
+    if np.isnan(X).any():
+        raise ValueError("points contain NaN (a failed run's parameters are NaN: there is nothing to evaluate)")
+    return np.clip(X, 0.0, 1.0)
 
 
 class UpdatingProblem:
-    """Model updating of ``model`` to ``measured`` over ``parameters`` (default: all of the model's)."""
+    """Model updating of ``model`` to ``measured`` over ``parameters`` (default: all of the model's).
+
+    Immutable after construction; ``evaluate`` is pure (the same X gives the same
+    Evaluations), so one problem can serve any number of runs, in any order or process.
+    """
+
+    evaluations_per_point = 1
 
     def __init__(
         self,
@@ -100,14 +100,17 @@ class UpdatingProblem:
         measured: MeasuredModes,
         parameters: ParameterSet | None = None,
         objective: ObjectiveSpec | None = None,
-        runner: Runner | None = None,
         name: str = "",
     ):
+        _check_type("model", model, StructuralModel, "a structural model (parameters, dofs, modal(theta))")
+        _check_type("measured", measured, MeasuredModes, "MeasuredModes (see framework.measurements.load)")
+        _check_type("parameters", parameters, (ParameterSet, type(None)), "a ParameterSet or None")
+        _check_type("objective", objective, (ObjectiveSpec, type(None)), "an ObjectiveSpec or None")
+        _check_type("name", name, str, "a string")
         self.model = model
         self.measured = measured
         self.parameters = parameters if parameters is not None else model.parameters
         self.spec = objective if objective is not None else ObjectiveSpec()
-        self.runner = runner
         self.name = name or getattr(model, "name", type(model).__name__)
         self.formulation = get_formulation(self.spec.formulation)
         check_constraints(self.parameters, self.spec)
@@ -124,9 +127,20 @@ class UpdatingProblem:
                     f"{measured.source}: measured DOF(s) {unknown} are not DOFs of model {self.name!r}; "
                     f"model DOFs: {list(model.dofs)[:20]}"
                 )
+        weighted = self.spec.formulation in ("spec", "reference")  # formulations that use alpha and beta
+        if weighted and self.spec.alpha == 0 and not use_shape_term(measured, self.spec):
+            raise InputError(
+                f"objective.alpha is 0 and there is no MAC term ({measured.source} has no shapes or "
+                "use_shapes is false): the objective would be identically 0"
+            )
         self.n_modal_residuals = self.formulation.n_residuals(measured, self.spec)
         self.n_residuals = self.n_modal_residuals + n_penalty_residuals(self.parameters, self.spec)
-        self.log = EvaluationLog()
+        self._frozen = True
+
+    def __setattr__(self, name, value):
+        if getattr(self, "_frozen", False):
+            raise AttributeError(f"UpdatingProblem is immutable: build a new one instead of setting {name!r}")
+        object.__setattr__(self, name, value)
 
     # ---- basic facts ------------------------------------------------------------------
     @property
@@ -138,30 +152,19 @@ class UpdatingProblem:
         return len(self.formulation.objective_names)
 
     @property
-    def n_evaluations(self) -> int:
-        return self.log.n_evaluations
-
-    @property
     def x_initial(self) -> np.ndarray:
         return self.parameters.x_initial
-
-    def reset(self) -> None:
-        """Forget counted evaluations (a new run on the same problem)."""
-        self.log = EvaluationLog()
 
     def theta(self, x: np.ndarray) -> np.ndarray:
         return self.parameters.to_physical(x)
 
     # ---- evaluation ---------------------------------------------------------------------
-    def evaluate(self, X: np.ndarray, *, record: bool = True) -> Evaluations:
-        """Evaluate points X (n, k) in normalized coordinates (clipped to [0, 1])."""
-        X = np.atleast_2d(np.asarray(X, dtype=float))
-        if X.shape[1] != self.n_params:
-            raise ValueError(f"points have {X.shape[1]} coordinates, problem has {self.n_params} parameters")
-        X = np.clip(X, 0.0, 1.0)
+    def evaluate(self, X: np.ndarray, runner: Runner | None = None) -> Evaluations:
+        """Evaluate points X (n, k) in normalized coordinates (clipped to [0, 1]); pure."""
+        X = as_points(X, self.n_params)
         theta = self.parameters.to_physical(X)
         thetas = [self.parameters.as_dict(t) for t in theta]
-        results = self.runner(self.model, thetas) if self.runner is not None else modal_many(self.model, thetas)
+        results = runner(self.model, thetas) if runner is not None else modal_many(self.model, thetas)
         n, r = len(thetas), self.n_residuals
         residuals = np.empty((n, r))
         ok = np.ones(n, dtype=bool)
@@ -194,11 +197,13 @@ class UpdatingProblem:
             reasons[i] = res.reason
             details[i] = res.detail
             residuals[i] = fail_value
+            correlations[i] = None
             log.debug("evaluation failed at %s: %s", thetas[i], res)
         objective = np.sum(residuals**2, axis=1)
-        if record:
-            self.log.record(X, objective, reasons, details)
-        return Evaluations(objective, residuals, ok, reasons, correlations)
+        F = self.formulation.split(residuals[:, : self.n_modal_residuals], self.measured, self.spec)
+        F = F + np.sum(residuals[:, self.n_modal_residuals :] ** 2, axis=1)[:, None]
+        F[~ok] = self.spec.failure_penalty
+        return Evaluations(objective, residuals, F, ok, reasons, details, correlations)
 
     def _batch_residuals(self, results: list):
         """Vectorized residuals when every point succeeded with the same modes, else None."""
@@ -218,36 +223,37 @@ class UpdatingProblem:
         freqs = np.stack([r.frequencies_hz for r in results])
         return fn(freqs, shapes, self.measured, self.spec)
 
-    def objective(self, X: np.ndarray) -> np.ndarray:
+    # ---- uncounted conveniences (a run counts through its Evaluator) ----------------------
+    def objective(self, X: np.ndarray, runner: Runner | None = None) -> np.ndarray:
         """Scalar objective Pi for each row of X (n, k) -> (n,)."""
-        return self.evaluate(X).objective
+        return self.evaluate(X, runner).objective
 
-    def objective1(self, x: np.ndarray) -> float:
+    def objective1(self, x: np.ndarray, runner: Runner | None = None) -> float:
         """Scalar objective of one point x (k,)."""
-        return float(self.evaluate(np.asarray(x)[None, :]).objective[0])
+        return float(self.evaluate(np.asarray(x, float)[None, :], runner).objective[0])
 
-    def residuals(self, x: np.ndarray) -> np.ndarray:
+    def residuals(self, x: np.ndarray, runner: Runner | None = None) -> np.ndarray:
         """Residual vector of one point; sum of squares equals Pi."""
-        return self.evaluate(np.asarray(x)[None, :]).residuals[0]
+        return self.evaluate(np.asarray(x, float)[None, :], runner).residuals[0]
 
-    def objectives(self, X: np.ndarray) -> np.ndarray:
+    def objectives(self, X: np.ndarray, runner: Runner | None = None) -> np.ndarray:
         """Objective vector for each row of X -> (n, n_objectives), penalties added to each."""
-        ev = self.evaluate(X)
-        F = self.formulation.split(ev.residuals[:, : self.n_modal_residuals], self.measured, self.spec)
-        extra = np.sum(ev.residuals[:, self.n_modal_residuals :] ** 2, axis=1)
-        F = F + extra[:, None]
-        F[~ev.ok] = self.spec.failure_penalty
-        return F
+        return self.evaluate(X, runner).objectives
 
     # ---- reporting ------------------------------------------------------------------------
-    def correlation_at(self, theta: np.ndarray) -> ModeCorrelation:
-        """Correlation at a physical point (not counted as an optimizer evaluation)."""
+    def correlation_at(self, theta: np.ndarray, runner: Runner | None = None) -> ModeCorrelation:
+        """Mode pairing at a physical point theta; a failed evaluation raises ModelEvaluationError."""
         x = self.parameters.to_normalized(np.asarray(theta, float))
-        ev = self.evaluate(x[None, :], record=False)
+        ev = self.evaluate(x[None, :], runner)
         if not ev.ok[0]:
-            raise ModelEvaluationError(ev.reasons[0] or "failed", f"at theta={theta}")
+            raise ModelEvaluationError(ev.reasons[0] or "failed", f"at theta={theta}: {ev.details[0]}")
         return ev.correlations[0]
 
-    def mode_table(self, theta: np.ndarray) -> pd.DataFrame:
+    def mode_table(self, theta: np.ndarray, runner: Runner | None = None) -> pd.DataFrame:
         """One row per measured mode at physical point theta: f, error %, MAC, matched."""
-        return correlation_table(self.correlation_at(theta), self.measured)
+        return correlation_table(self.correlation_at(theta, runner), self.measured)
+
+
+def _check_type(argument: str, value, kind, expected: str) -> None:
+    if not isinstance(value, kind) or (kind is StructuralModel and isinstance(value, (dict, str))):
+        raise InputError(f"UpdatingProblem: argument {argument!r} must be {expected}, got {type(value).__name__}")

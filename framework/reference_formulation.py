@@ -38,7 +38,6 @@ from framework.objectives import (
     Formulation,
     ModeCorrelation,
     ObjectiveSpec,
-    register_formulation,
     spec_n_residuals,
     spec_split,
     use_shape_term,
@@ -49,20 +48,20 @@ WEIGHTS = ("std", "unit")
 KNOWN_OPTIONS = {"matching", "weights"}
 
 
-def _options(spec: ObjectiveSpec) -> tuple[str, str]:
-    opts = dict(spec.options or {})
-    unknown = sorted(set(opts) - KNOWN_OPTIONS)
+def check_options(options: dict) -> None:
+    """Reject unknown option keys and values (called when the ObjectiveSpec is built)."""
+    unknown = sorted(set(options) - KNOWN_OPTIONS)
     if unknown:
-        raise InputError(
-            f"objective.options: unknown key(s) {unknown} for formulation 'reference'; known: {sorted(KNOWN_OPTIONS)}"
-        )
-    matching = opts.get("matching", "order")
-    weights = opts.get("weights", "std")
-    if matching not in MATCHING:
-        raise InputError(f"objective.options.matching must be one of {list(MATCHING)}, got {matching!r}")
-    if weights not in WEIGHTS:
-        raise InputError(f"objective.options.weights must be one of {list(WEIGHTS)}, got {weights!r}")
-    return matching, weights
+        raise ValueError(f"unknown key(s) {unknown} for formulation 'reference'; known: {sorted(KNOWN_OPTIONS)}")
+    if options.get("matching", "order") not in MATCHING:
+        raise ValueError(f"matching must be one of {list(MATCHING)}, got {options['matching']!r}")
+    if options.get("weights", "std") not in WEIGHTS:
+        raise ValueError(f"weights must be one of {list(WEIGHTS)}, got {options['weights']!r}")
+
+
+def _options(spec: ObjectiveSpec) -> tuple[str, str]:
+    opts = spec.options or {}
+    return opts.get("matching", "order"), opts.get("weights", "std")
 
 
 def eigenvalue_rad2_per_s2(f_hz: np.ndarray) -> np.ndarray:
@@ -151,16 +150,10 @@ def reference_residuals(result: ModalResult, measured: MeasuredModes, spec: Obje
     return np.concatenate([r_lam, r_psi]), corr
 
 
-def reference_n_residuals(measured: MeasuredModes, spec: ObjectiveSpec) -> int:
-    """Same layout as the SPEC residuals ([eigenvalue terms, shape terms]); checks options first."""
-    _options(spec)  # called when the problem is built: bad options fail before any run
-    return spec_n_residuals(measured, spec)
-
-
 FORMULATION = Formulation(
-    reference_residuals, reference_n_residuals, spec_split, objective_names=("Pi_lambda", "Pi_MAC")
+    reference_residuals,
+    spec_n_residuals,  # same layout as the SPEC residuals: [eigenvalue terms, shape terms]
+    spec_split,
+    objective_names=("Pi_lambda", "Pi_MAC"),
+    check_options=check_options,
 )
-
-# ObjectiveSpec validates ``formulation`` against the registered names only, so register
-# on import (framework.models.smu imports this module) in addition to the lazy entry.
-register_formulation("reference", FORMULATION)

@@ -7,8 +7,12 @@ With a forward difference of relative step h on parameter p_j (n + 1 model runs)
     S_MAC[i, j] = (MAC_i(p + h p_j e_j) - MAC_i(p)) / h             (dMAC per dp/p)
 
 (a parameter whose value is 0 is stepped by h times its bound width and reported per
-that absolute step; a parameter whose forward step would leave its upper bound is stepped
-backwards, a backward difference, so the step is never clipped away).
+that absolute step). A step must not be clipped at a bound of the normalized box: by
+default a forward step that would leave the upper bound is taken backwards (a backward
+difference); with ``widen=(lo, hi)`` the evaluation uses bounds [lo, hi] x initial
+instead (e.g. (0.01, 2)), so every step stays forward. The n + 1 points go through
+``problem.evaluate`` in one call (any runner); they are not optimizer evaluations and
+are counted nowhere.
 
 From the stacked matrix S = [S_f; S_MAC]: singular values, condition number s_max / s_min,
 and the parameter correlation implied by a linearized least-squares fit,
@@ -23,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from framework.errors import ModelEvaluationError
+from framework.errors import InputError, ModelEvaluationError
 
 
 @dataclass(frozen=True)
@@ -35,6 +39,9 @@ class SensitivityResult:
     singular_values: np.ndarray
     condition_number: float
     correlation: np.ndarray  # (k, k)
+    theta0: np.ndarray  # (k,) physical point of the derivatives
+    f_model_hz: np.ndarray  # (m,) frequencies of the paired modes at theta0
+    rel_step: float
 
     def table(self) -> pd.DataFrame:
         """Tidy: one row per quantity, mode and parameter."""
@@ -50,9 +57,21 @@ class SensitivityResult:
         return pd.DataFrame(self.correlation, index=self.parameters, columns=self.parameters)
 
 
-def sensitivity_matrix(problem, theta0: np.ndarray | None = None, rel_step: float = 1e-3,
-                       include_mac: bool = True) -> SensitivityResult:
-    """Forward-difference relative sensitivities at physical point theta0 (default: initial)."""
+def sensitivity_matrix(
+    problem,
+    theta0: np.ndarray | None = None,
+    rel_step: float = 1e-3,
+    include_mac: bool = True,
+    widen: tuple[float, float] | None = None,
+    runner=None,
+) -> SensitivityResult:
+    """Forward-difference relative sensitivities at physical point theta0 (default: initial).
+
+    widen: evaluate with bounds [lo, hi] x initial (so no step is clipped, every step
+    forward) instead of the problem's own bounds.
+    """
+    if widen is not None:
+        problem = _widened(problem, widen)
     params = problem.parameters
     theta0 = params.initial.copy() if theta0 is None else np.asarray(theta0, float)
     points = [theta0]
@@ -66,7 +85,10 @@ def sensitivity_matrix(problem, theta0: np.ndarray | None = None, rel_step: floa
         points.append(t)
         steps.append(step)
     X = params.to_normalized(np.array(points))
-    ev = problem.evaluate(np.clip(X, 0.0, 1.0))
+    if np.any(X < -1e-12) or np.any(X > 1 + 1e-12):
+        raise InputError(f"sensitivity point theta0={theta0.tolist()} or its steps lie outside the bounds; "
+                         "give widen=(lo, hi)")  # fmt: skip
+    ev = problem.evaluate(np.clip(X, 0.0, 1.0), runner)
     if not ev.ok.all():
         bad = int(np.flatnonzero(~ev.ok)[0])
         raise ModelEvaluationError(ev.reasons[bad] or "failed", f"sensitivity point {bad} failed")
@@ -88,4 +110,18 @@ def sensitivity_matrix(problem, theta0: np.ndarray | None = None, rel_step: floa
     C = np.linalg.pinv(S.T @ S)
     d = np.sqrt(np.clip(np.diag(C), 1e-300, None))
     rho = C / np.outer(d, d)
-    return SensitivityResult(params.names, list(problem.measured.labels), S_f, S_mac, sv, cond, rho)
+    return SensitivityResult(
+        params.names, list(problem.measured.labels), S_f, S_mac, sv, cond, rho, theta0, np.asarray(f0, float), rel_step
+    )
+
+
+def _widened(problem, widen: tuple[float, float]):
+    """The same problem with bounds [lo, hi] x initial for every parameter (not 0 initially)."""
+    from framework.problem import UpdatingProblem
+
+    lo, hi = widen
+    if not 0 <= lo < 1 < hi:
+        raise InputError(f"sensitivity: widen must be (lo, hi) with 0 <= lo < 1 < hi, got {widen!r}")
+    bounds = {p.name: tuple(sorted((lo * p.initial, hi * p.initial))) for p in problem.parameters if p.initial != 0}
+    parameters = problem.parameters.with_bounds(bounds)
+    return UpdatingProblem(problem.model, problem.measured, parameters, problem.spec, name=problem.name)

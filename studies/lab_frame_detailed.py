@@ -87,35 +87,33 @@ def sensitivity_table(
     """Relative sensitivities by forward differences at the initial model (or at ``at``):
 
     S_f = (f_i(theta_j (1 + h)) - f_i) / (f_i h),  S_MAC = (MAC_i(theta_j (1 + h)) - MAC_i) / h
-    for the analytical modes paired with measured modes 1..3 (h = rel_step). The bounds are
-    widened to [0.01, 2] x initial so that the step is never clipped at a bound.
+    for the analytical modes paired with measured modes 1..3 (h = rel_step), computed by
+    :func:`framework.sensitivity.sensitivity_matrix` with the bounds widened to
+    [0.01, 2] x initial so that the step is never clipped at a bound.
     """
+    from framework.sensitivity import sensitivity_matrix
+
     model = make_structure(cfg.structure.name, **cfg.structure.options)
     params = model.parameters.subset(names) if names else model.parameters
-    params = params.with_bounds({p.name: (0.01 * p.initial, 2.0 * p.initial) for p in params})
     measured = builtin_measured(cfg.measured.builtin, cfg.measured.case)
     problem = UpdatingProblem(model, measured, parameters=params, objective=objective_spec(cfg))
     theta0 = problem.parameters.initial.copy()
     for name, value in (at or {}).items():
         theta0[problem.parameters.names.index(name)] = value
-    base = problem.correlation_at(theta0)
+    res = sensitivity_matrix(problem, theta0=theta0, rel_step=rel_step, widen=(0.01, 2.0))
     rows = []
-    for j, name in enumerate(problem.parameters.names):
-        theta = theta0.copy()
-        theta[j] *= 1.0 + rel_step
-        pert = problem.correlation_at(theta)
-        for i in range(problem.measured.n_modes):
+    for j, name in enumerate(res.parameters):
+        for i, label in enumerate(res.modes):
             rows.append(
                 {
                     "point": point,
                     "parameter": name,
                     "value": theta0[j],
                     "mode": i + 1,
-                    "label": problem.measured.labels[i],
-                    "f_model_hz": base.f_model_hz[i],
-                    "rel_sensitivity_frequency": (pert.f_model_hz[i] - base.f_model_hz[i])
-                    / (base.f_model_hz[i] * rel_step),
-                    "rel_sensitivity_mac": (pert.mac[i] - base.mac[i]) / rel_step,
+                    "label": label,
+                    "f_model_hz": res.f_model_hz[i],
+                    "rel_sensitivity_frequency": res.frequency[i, j],
+                    "rel_sensitivity_mac": res.mac[i, j],
                     "rel_step": rel_step,
                 }
             )
@@ -187,7 +185,6 @@ def run_updating(cfg: StudyConfig, structure: str, options: dict, names, bounds,
 
     theta0 = problem.parameters.initial
     pi0 = problem.objective1(problem.x_initial)
-    problem.reset()
     run_id = f"{structure}:initial"
     run_rows.append(
         {
@@ -212,7 +209,6 @@ def run_updating(cfg: StudyConfig, structure: str, options: dict, names, bounds,
         runs = alg.runs or n_runs
         for r in range(runs):
             seed = cfg.seed + r
-            problem.reset()
             t0 = time.perf_counter()
             try:
                 res = run_optimizer(alg.algorithm, problem, seed=seed, budget=budget, **alg.settings)
@@ -225,7 +221,7 @@ def run_updating(cfg: StudyConfig, structure: str, options: dict, names, bounds,
                         "algorithm": key,
                         "seed": seed,
                         "objective": np.nan,
-                        "n_evaluations": problem.n_evaluations,
+                        "n_evaluations": 0,
                         "n_iterations": 0,
                         "wall_s": time.perf_counter() - t0,
                         "status": "error",

@@ -5,6 +5,7 @@ import pytest
 
 from framework import damage
 from framework.errors import InputError, ModelEvaluationError
+from framework.evaluator import Evaluator
 from framework.models import beam
 from framework.optimizers import Budget, run_optimizer
 from framework.problem import UpdatingProblem
@@ -116,15 +117,22 @@ def test_two_state_problem_matches_separate_problems():
     model = beam.make_model()
     p1 = UpdatingProblem(model, beam.measured("state1", 3.0, 1))
     p2 = UpdatingProblem(model, beam.measured("state2", 3.0, 1))
-    tp = damage.TwoStateProblem(p1, p2)
+    tp = damage.two_state(p1, p2)
     X = np.random.default_rng(0).random((4, 20))
-    F = tp.objectives(X)
+    ev = tp.evaluate(X)
+    F = ev.objectives
     np.testing.assert_allclose(F[:, 0], p1.objective(X[:, :10]))
     np.testing.assert_allclose(F[:, 1], p2.objective(X[:, 10:]))
-    np.testing.assert_allclose(np.sum(tp.residuals(X[0]) ** 2), F[0].sum())
-    assert tp.n_evaluations == 5 and tp.parameters.names[10] == "s2_ratio_01"
+    np.testing.assert_allclose(ev.objective, F.sum(axis=1))
+    np.testing.assert_allclose(np.sum(ev.residuals**2, axis=1), F.sum(axis=1))
+    assert tp.parameters.names[10] == "s2_ratio_01" and tp.n_params == 20
+    # an evaluator counts a two-state point as two model evaluations
+    evaluator = Evaluator(tp)
+    evaluator.objective(X)
+    evaluator.objective1(X[0])
+    assert evaluator.n_evaluations == 10 and evaluator.history().shape == (10,)
     with pytest.raises(ValueError, match="has 20"):
-        tp.objectives(X[:, :10])
+        tp.evaluate(X[:, :10])
 
 
 def test_sm_recovers_damage_without_discretization_error():
@@ -132,7 +140,7 @@ def test_sm_recovers_damage_without_discretization_error():
     model = beam.make_model()
     for state in ("state1", "state2"):
         problem = UpdatingProblem(model, beam.measured(state, 0.0, 0, mesh="apriori"))
-        res = run_optimizer("sm", problem, 0, Budget(max_evaluations=3000, target_objective=None), diff_step=1e-6)
+        res = run_optimizer("sm", problem, 0, Budget(max_evaluations=3000, target_objective=None, stall_tolerance=0.0), diff_step=1e-6)
         assert np.max(np.abs(res.theta_best - beam.equivalent_ratios(state))) < 0.005
 
 
@@ -140,7 +148,7 @@ def test_discretization_error_of_the_minimum_is_quantified():
     """20-element data: the minimum of Pi lies 0.048 (state 1) from the mean-of-halves truth."""
     model = beam.make_model()
     problem = UpdatingProblem(model, beam.measured("state1", 0.0, 0))
-    res = run_optimizer("sm", problem, 0, Budget(max_evaluations=3000, target_objective=None), diff_step=1e-6)
+    res = run_optimizer("sm", problem, 0, Budget(max_evaluations=3000, target_objective=None, stall_tolerance=0.0), diff_step=1e-6)
     err = np.abs(res.theta_best - beam.equivalent_ratios("state1"))
     assert res.objective < 1e-8
     assert 0.035 < err.max() < 0.06

@@ -2,7 +2,6 @@
 and hangs are recorded failures of one evaluation; workers never outlive their parent."""
 
 import faulthandler
-import inspect
 import os
 import pickle
 import signal
@@ -18,6 +17,7 @@ import psutil
 import pytest
 
 from framework.errors import ModelEvaluationError
+from framework.evaluator import Evaluator
 from framework.isolation import IsolatedRunner, exit_description, split
 from framework.models.base import ModalResult, modal_many, safe_modal
 from framework.models.lab_frame import ThreeDofFrame
@@ -163,23 +163,20 @@ def test_each_fault_is_a_recorded_failure_of_its_point(kind, model, reference):
 
 
 def _evaluate(model, measured, X, runner):
-    """UpdatingProblem.evaluate with a runner, whichever API the problem has (argument or constructor)."""
-    if "runner" in inspect.signature(UpdatingProblem.evaluate).parameters:
-        problem = UpdatingProblem(model, measured)
-        return problem, problem.evaluate(X, runner=runner)
-    problem = UpdatingProblem(model, measured, runner=runner)
-    return problem, problem.evaluate(X)
+    """A run's evaluator over the problem, evaluating X with the runner: (evaluator, evaluations)."""
+    evaluator = Evaluator(UpdatingProblem(model, measured), runner=runner)
+    return evaluator, evaluator.evaluate(X)
 
 
 def test_the_problem_records_each_fault_with_its_reason(model):
     X = fb.PARAMETERS.to_normalized(np.array([[p[n] for n in fb.PARAMETERS.names] for p in POINTS]))
     with ProcessRunner(2, timeout_s=TIMEOUT_S) as runner:
-        problem, ev = _evaluate(model, fb.measured(), X, runner)
+        evaluator, ev = _evaluate(model, fb.measured(), X, runner)
     assert ev.reasons == EXPECTED
     assert list(ev.ok) == [r is None for r in REGIONS]
-    np.testing.assert_allclose(ev.objective[~ev.ok], problem.spec.failure_penalty)
+    np.testing.assert_allclose(ev.objective[~ev.ok], evaluator.problem.spec.failure_penalty)
     assert np.all(ev.objective[ev.ok] < 1.0)
-    assert {r: problem.log.failures[r] for r in fb.EXPECTED_REASON.values()} == dict.fromkeys(
+    assert {r: evaluator.failures[r] for r in fb.EXPECTED_REASON.values()} == dict.fromkeys(
         fb.EXPECTED_REASON.values(), 1)
 
 

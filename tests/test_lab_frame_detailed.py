@@ -159,7 +159,6 @@ def test_short_pso_run_improves_on_the_initial_model():
     params = model.parameters.subset(lfd.UPDATED_PARAMETERS)
     problem = UpdatingProblem(model, lfd.measured("base"), parameters=params)
     pi0 = problem.objective1(problem.x_initial)
-    problem.reset()
     result = run_optimizer(
         "pso", problem, seed=3, budget=Budget(max_evaluations=200, target_objective=None), swarm_size=10
     )

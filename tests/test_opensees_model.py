@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from framework.errors import ModelEvaluationError
+from framework.evaluator import Evaluator
 from framework.measurements import MeasuredModes
 from framework.models.opensees import OpenSeesModel
 from framework.optimizers import Budget, run_optimizer
@@ -64,7 +65,7 @@ def test_model_is_picklable_and_updates_from_measured_data():
     truth = m.modal({"E": 2.4e11})
     data = MeasuredModes(truth.frequencies_hz[:2], tuple(DOFS), truth.shapes[:, :2])
     p = UpdatingProblem(m, data)
-    r = run_optimizer("sm", p, seed=0, budget=Budget(max_evaluations=60))
+    r = run_optimizer("sm", p, seed=0, budget=Budget(max_evaluations=60, target_objective=None))
     assert r.theta_best[0] == pytest.approx(2.4e11, rel=1e-4)
 
 
@@ -87,7 +88,7 @@ def test_failures_become_reasons_not_crashes():
     ev = p.evaluate(np.array([[0.5]]))
     assert not ev.ok[0] and ev.reasons[0] == "build_failed"
     assert ev.objective[0] == pytest.approx(p.spec.failure_penalty)
-    assert "section table missing" in p.log.failure_summary()
+    assert "section table missing" in ev.details[0]
     with pytest.raises(ModelEvaluationError, match="build_failed: ValueError: section table missing"):
         OpenSeesModel(_raising_build, PARAMS, {"a": (2, 1)}, n_modes=1).modal({})
 
@@ -99,7 +100,9 @@ def test_singular_model_fails_with_a_reason():
     ev = p.evaluate(np.array([[0.5], [0.6]]))
     assert not ev.ok.any()
     assert ev.reasons == ["eigen_failed", "eigen_failed"]
-    assert p.log.failures["eigen_failed"] == 2
+    r = run_optimizer("pso", p, seed=0, budget=Budget(max_evaluations=4), swarm_size=2)
+    assert r.status == "failed" and r.n_failed == 4 and "eigen_failed x4" in r.failures
+    assert np.isnan(r.objective) and np.isnan(r.theta_best).all()
 
 
 def test_unknown_direction_is_rejected():
@@ -114,9 +117,10 @@ def _exiting_build(v):
 def test_sys_exit_in_a_build_is_a_failure_not_the_end_of_the_study():
     p = UpdatingProblem(OpenSeesModel(_exiting_build, PARAMS, {"a": (2, 1)}, n_modes=1),
                         MeasuredModes(np.array([1.0])))
-    ev = p.evaluate(np.array([[0.5]]))
+    evaluator = Evaluator(p)
+    ev = evaluator.evaluate(np.array([[0.5]]))
     assert not ev.ok[0] and ev.reasons == ["model_exit"]
-    assert "sys.exit('licence server unreachable')" in p.log.failure_summary()
+    assert "sys.exit('licence server unreachable')" in evaluator.failure_summary()
 
 
 def _nan_modulus_build(v):

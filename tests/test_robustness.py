@@ -184,9 +184,9 @@ def test_a_dead_evaluation_worker_is_replaced(tmp_path, monkeypatch):
 
     runner = ProcessRunner(2)
     try:
-        p = UpdatingProblem(fault_models.make_dying(str(tmp_path / "m")), measured(), runner=runner)
+        p = UpdatingProblem(fault_models.make_dying(str(tmp_path / "m")), measured())
         X = np.random.default_rng(0).random((6, 6))
-        values = p.objective(X)
+        values = p.objective(X, runner)
     finally:
         runner.close()
     ref = UpdatingProblem(fault_models.ThreeDofFrame(), measured()).objective(X)

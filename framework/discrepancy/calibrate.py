@@ -15,11 +15,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from framework.discrepancy import likelihood
+from framework.errors import ModelEvaluationError
 from framework.measurements import MeasuredModes
 from framework.models.base import ModalResult, StructuralModel
 from framework.objectives import ModeCorrelation, ObjectiveSpec
 from framework.optimizers import Budget, run_optimizer
-from framework.parameters import Parameter, ParameterSet
+from framework.parameters import ParameterSet
 from framework.problem import UpdatingProblem
 
 log = logging.getLogger(__name__)
@@ -86,28 +87,23 @@ def calibrate(
     budget = Budget(max_evaluations=max_evaluations, target_objective=None, stall_iterations=10)
     fixed = list(x_starts) if x_starts is not None else [params.x_initial]
     best = None
-    best_problem = problem
     starts: list[float] = []
     n_eval = 0
+    tolerances = {"ftol": 1e-8, "xtol": 1e-8, "gtol": 1e-8}
     for i in range(max(n_starts, len(fixed))):
         if i < len(fixed):
-            theta0 = params.to_physical(np.clip(np.asarray(fixed[i], float), 0.0, 1.0))
-            moved = ParameterSet(
-                Parameter(p.name, float(v), p.lower, p.upper, p.unit, p.description) for p, v in zip(params, theta0)
-            )
-            prob = UpdatingProblem(model, measured, moved, spec, name=label)
-            res = run_optimizer("sm", prob, seed + i, budget, start="initial", ftol=1e-8, xtol=1e-8, gtol=1e-8)
+            x0 = np.clip(np.asarray(fixed[i], float), 0.0, 1.0)
+            res = run_optimizer("sm", problem, seed + i, budget, x0=x0.tolist(), **tolerances)
         else:
-            prob = problem
-            prob.reset()
-            res = run_optimizer("sm", prob, seed + i, budget, start="random", ftol=1e-8, xtol=1e-8, gtol=1e-8)
+            res = run_optimizer("sm", problem, seed + i, budget, start="random", **tolerances)
         n_eval += res.n_evaluations
         starts.append(float(res.objective))
-        if best is None or res.objective < best.objective:
-            best, best_problem = res, prob
-    problem = best_problem
+        if res.status != "failed" and (best is None or res.objective < best.objective):
+            best = res
+    if best is None:
+        raise ModelEvaluationError("calibration_failed", f"{label}: every evaluation of every start failed")
     theta = best.theta_best
-    ev = problem.evaluate(best.x_best[None, :], record=False)
+    ev = problem.evaluate(best.x_best[None, :])
     values = problem.parameters.as_dict(theta)
     modal = model.modal(values)
     fit = Fit(

@@ -40,7 +40,7 @@ def loo_chi2(
             model, sub, parameters=params, spec=spec, n_starts=1, x_starts=[x_fit],
             max_evaluations=max_evaluations, label=f"{fit.label} without mode {j + 1}", active=fit.active,
         )  # fmt: skip
-        ev = full.evaluate(params.to_normalized(f.theta)[None, :], record=False)
+        ev = full.evaluate(params.to_normalized(f.theta)[None, :])
         chi_f, chi_s = likelihood.per_mode_chi2(ev.residuals[0], measured, spec)
         out[j] = chi_f[j] + chi_s[j]
     return float(out.sum()), out

@@ -27,8 +27,9 @@ so that leaving a mode unmatched is never cheaper than matching it badly (the pe
 carried by r_f,j; the shape residuals are 0). Pairing: :func:`framework.objectives.correlate`
 (highest MAC, one-to-one; nearest frequency without shapes).
 
-The likelihood is registered as the objective formulation ``"gaussian"`` so that the
-framework's :class:`~framework.problem.UpdatingProblem` and optimizers calibrate with it.
+The likelihood is the objective formulation ``"gaussian"`` (named in the static table
+:data:`framework.objectives.FORMULATIONS`) so that the framework's
+:class:`~framework.problem.UpdatingProblem` and optimizers calibrate with it.
 """
 
 from __future__ import annotations
@@ -39,13 +40,7 @@ import numpy as np
 
 from framework.measurements import MeasuredModes
 from framework.models.base import ModalResult
-from framework.objectives import (
-    FORMULATIONS,
-    Formulation,
-    ObjectiveSpec,
-    correlate,
-    register_formulation,
-)
+from framework.objectives import Formulation, ObjectiveSpec, correlate
 
 #: sigma_f / f when the data give no frequency_std_hz (0.5 %: typical scatter of
 #: identified frequencies between repeated tests of civil structures)
@@ -150,9 +145,23 @@ def per_mode_chi2(residuals: np.ndarray, measured: MeasuredModes, spec: Objectiv
     return f, s
 
 
-FORMULATION = Formulation(gaussian_residuals, n_residuals, split_chi2, objective_names=("chi2_frequency", "chi2_shape"))
-if FORMULATION_NAME not in FORMULATIONS:
-    register_formulation(FORMULATION_NAME, FORMULATION)
+def check_options(options: dict) -> None:
+    """The Gaussian formulation reads one option, ``unmatched_window`` (a number > 0)."""
+    unknown = sorted(set(options) - {"unmatched_window"})
+    if unknown:
+        raise ValueError(f"unknown key(s) {unknown} for formulation 'gaussian'; known: ['unmatched_window']")
+    window = options.get("unmatched_window", DEFAULT_UNMATCHED_WINDOW)
+    if isinstance(window, bool) or not isinstance(window, (int, float)) or not 0 < window < float("inf"):
+        raise ValueError(f"unmatched_window must be a finite number > 0, got {window!r}")
+
+
+FORMULATION = Formulation(
+    gaussian_residuals,
+    n_residuals,
+    split_chi2,
+    objective_names=("chi2_frequency", "chi2_shape"),
+    check_options=check_options,
+)
 
 
 def objective_spec(

@@ -1,4 +1,4 @@
-"""Excitation signals of the simulated tests: sine sweep and jumping load.
+"""Excitation signals of the simulated tests: sine sweep, jumping, ambient noise.
 
 All return (n,) arrays sampled at ``sampling_hz``; amplitudes are in the input's unit
 (N for a shaker force, m/s^2 for a table acceleration).
@@ -69,4 +69,3 @@ def jumping(
         x[k : k + nc] += peak * rng.uniform(0.5, 1.0) * pulse
         t += 1.0 / rng.uniform(*rate_hz)
     return x
-

@@ -172,8 +172,6 @@ _FREQUENCIES = {
     "mass_1.379kg": [3.48, 4.79, 7.10],
 }
 DAMPING_RATIO = np.array([0.0121, 0.0078, 0.0081])
-#: FRF peak picking of the same tests (Hz), reported for comparison.
-PEAK_PICKING_HZ = (3.56, 5.02, 7.37)
 
 
 def measured(case: str = "base") -> MeasuredModes:

@@ -23,7 +23,6 @@ from pathlib import Path
 
 import numpy as np
 
-from framework import reference_formulation  # noqa: F401  (registers formulation "reference")
 from framework.errors import InputError
 from framework.measurements import MeasuredModes
 from framework.models.matrix import MatrixModel, load_matrices

@@ -1,24 +1,31 @@
 """Optimizer adapters, one module per method, all with the signature
 
-    run(problem, seed, budget, **settings) -> OptimizerResult
+    run(evaluator, seed, budget, **settings) -> Outcome
 
-``run_optimizer(name, ...)`` dispatches by name; ``settings_model(name)`` returns the
-pydantic settings class (unknown keys rejected) used to validate configs.
+``run_optimizer(name, problem, seed, budget, runner=..., progress=..., **settings)``
+creates the run's :class:`~framework.evaluator.Evaluator` (count, best point, history,
+failures, budget), dispatches to the adapter by name and builds the
+:class:`OptimizerResult` from the evaluator; the problem itself is never changed, so one
+problem serves any number of runs. ``settings_model(name)`` returns the pydantic settings
+class (unknown keys rejected) used to validate configs.
 """
 
 from __future__ import annotations
 
 import importlib
+import time
+from collections.abc import Callable
 
 from framework.errors import InputError
-from framework.optimizers.base import Budget, OptimizerResult
+from framework.evaluator import Evaluator
+from framework.optimizers.base import Budget, OptimizerResult, build_result
 
 #: name -> (module, settings class name)
 OPTIMIZERS: dict[str, tuple[str, str]] = {
     "pso": ("framework.optimizers.pso", "PSOSettings"),
     "ga": ("framework.optimizers.ga", "GASettings"),
     "annealing": ("framework.optimizers.annealing", "AnnealingSettings"),
-    "sm": ("framework.optimizers.sensitivity", "SMSettings"),
+    "sm": ("framework.optimizers.sm", "SMSettings"),
     "snt": ("framework.optimizers.niching", "SNTSettings"),
     "nsga2": ("framework.optimizers.nsga2", "NSGA2Settings"),
 }
@@ -35,9 +42,27 @@ def settings_model(name: str):
     return getattr(_module(name), OPTIMIZERS[name][1])
 
 
-def run_optimizer(name: str, problem, seed: int, budget: Budget | None = None, **settings) -> OptimizerResult:
-    """Run optimizer ``name`` on ``problem`` from ``seed`` within ``budget``."""
-    return _module(name).run(problem, seed, budget or Budget(), **settings)
+def run_optimizer(
+    name: str,
+    problem,
+    seed: int,
+    budget: Budget | None = None,
+    *,
+    runner=None,
+    progress: Callable[[int], object] | None = None,
+    **settings,
+) -> OptimizerResult:
+    """Run optimizer ``name`` on ``problem`` from ``seed`` within ``budget``.
+
+    runner: how the model is evaluated (``runner(model, thetas) -> list``; serial when
+    None); progress: called with the number of new model evaluations.
+    """
+    module = _module(name)
+    budget = budget or Budget()
+    evaluator = Evaluator(problem, budget.max_evaluations, runner=runner, progress=progress)
+    start = time.perf_counter()
+    outcome = module.run(evaluator, seed, budget, **settings)
+    return build_result(name, evaluator, seed, outcome, time.perf_counter() - start)
 
 
 __all__ = ["Budget", "OptimizerResult", "OPTIMIZERS", "run_optimizer", "settings_model"]

@@ -16,7 +16,11 @@ dual_annealing has other knobs; the mapping used here:
 - ``local_search``: dual_annealing's L-BFGS-B polish of each new minimum (scipy default,
   on here: pure SA spends many more evaluations to reach 1e-4). Set false for pure SA.
 
-Stops at the evaluation budget (maxfun) or when the best value falls below the target.
+Termination: dual_annealing reports only each new best point (its callback), not its
+iterations, so of the shared rule only the target applies (through the callback), plus
+the evaluation budget (maxfun, and the run's evaluator) and ``max_iterations``
+(scipy's maxiter: the smaller of the setting and ``budget.max_iterations``). The stall
+rule needs the best value per iteration and is not applied.
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from framework.optimizers.base import Budget, BudgetExhausted, OptimizerResult, Settings, Timer, make_result
+from framework.optimizers.base import Budget, BudgetExhausted, Outcome, Settings, Termination
 
 
 class AnnealingSettings(Settings):
@@ -44,51 +48,37 @@ def restart_ratio(interval: int, qv: float) -> float:
     return (2.0 ** (qv - 1.0) - 1.0) / ((1.0 + interval) ** (qv - 1.0) - 1.0)
 
 
-def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
+def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     from scipy.optimize import dual_annealing
 
     s = AnnealingSettings(**settings)
     qv = s.visit if s.visit is not None else (2.62 if s.schedule == "exponential" else 1.5)
     ratio = float(np.clip(restart_ratio(s.reanneal_interval, qv), 1e-12, 0.999))
-    target = budget.target_objective
+    termination = Termination(budget, evaluator, rules=("target",))
+    max_iterations = min(s.max_iterations, budget.max_iterations or s.max_iterations)
 
-    def fun(x):
-        if problem.log.n_evaluations >= budget.max_evaluations:
-            raise BudgetExhausted
-        return problem.objective1(x)
+    def callback(x, f, context):  # a new best point; a failed one never meets the target
+        return not evaluator.is_failed(x) and termination.update(f) is not None
 
-    def callback(x, f, context):
-        return target is not None and f < target
-
-    status = "budget"
-    n_iter = 0
-    with Timer() as timer:
-        try:
-            res = dual_annealing(
-                fun,
-                bounds=[(0.0, 1.0)] * problem.n_params,
-                maxiter=s.max_iterations,
-                initial_temp=s.initial_temp,
-                restart_temp_ratio=ratio,
-                visit=qv,
-                accept=s.accept,
-                maxfun=budget.max_evaluations,
-                seed=np.random.default_rng(seed),
-                no_local_search=not s.local_search,
-                callback=callback,
-            )
-            n_iter = int(res.nit)
-            status = "target" if target is not None and res.fun < target else "converged"
-            message = str(res.message)
-        except BudgetExhausted:
-            message = "evaluation budget exhausted"
-    return make_result(
-        "annealing",
-        problem,
-        seed,
-        timer.elapsed,
-        status,
-        n_iter,
-        message=message,
-        extra={"visit": qv, "restart_temp_ratio": ratio, "initial_temp": s.initial_temp},
-    )
+    status, n_iter = "budget", 0
+    try:
+        res = dual_annealing(
+            evaluator.objective1,
+            bounds=[(0.0, 1.0)] * evaluator.n_params,
+            maxiter=max_iterations,
+            initial_temp=s.initial_temp,
+            restart_temp_ratio=ratio,
+            visit=qv,
+            accept=s.accept,
+            maxfun=budget.max_evaluations,
+            seed=np.random.default_rng(seed),
+            no_local_search=not s.local_search,
+            callback=callback,
+        )
+        n_iter = int(res.nit)
+        status = termination.reason or "converged"
+        message = str(res.message)
+    except BudgetExhausted:
+        message = "evaluation budget exhausted"
+    extra = {"visit": qv, "restart_temp_ratio": ratio, "initial_temp": s.initial_temp}
+    return Outcome(status, n_iter, message=message, extra=extra)

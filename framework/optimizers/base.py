@@ -1,23 +1,28 @@
-"""What every optimizer adapter shares: budget, termination rule, result, seeding.
+"""What every optimizer adapter shares: budget, termination rule, outcome, result, seeding.
 
-Every adapter has the signature ``run(problem, seed, budget, **settings) -> OptimizerResult``.
-The problem is any object with ``n_params``, ``objective(X)`` (and ``residuals(x)`` for
-least squares, ``objectives(X)`` for multi-objective methods), ``parameters`` and a ``log``
-that counts evaluations (:class:`framework.problem.UpdatingProblem`).
+Every adapter has the signature ``run(evaluator, seed, budget, **settings) -> Outcome``.
+It sees the problem only through the run's :class:`~framework.evaluator.Evaluator`
+(``objective(X)``, ``objective1(x)``, ``residuals(x)``, ``objectives(X)``, ``n_params``,
+``parameters``, ``x_initial``), which counts, budgets and remembers the evaluations;
+``run_optimizer`` builds the :class:`OptimizerResult` from the evaluator and the outcome.
 
-Termination (SPEC 4, lab study): stop when the best value improved by less than
-``stall_tolerance`` over ``stall_iterations`` successive iterations, or the best value is
-below ``target_objective``, or ``max_evaluations`` model evaluations were spent.
+Termination (SPEC 4, lab study), one :class:`Termination` object per run: stop when the
+best value improved by less than ``stall_tolerance`` over ``stall_iterations`` successive
+iterations ("stalled"), or the best value is below ``target_objective`` ("target"), or
+``max_iterations`` iterations were done ("max_iterations"), or the next iteration would
+exceed ``max_evaluations`` model evaluations ("budget"). Each adapter reports its best
+value after every iteration and stops when told.
 """
 
 from __future__ import annotations
 
 import contextlib
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
+
+from framework.evaluator import BudgetExhausted  # noqa: F401  (re-exported for the adapters)
 
 
 class Budget(BaseModel):
@@ -38,13 +43,15 @@ class Settings(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
 
-class BudgetExhausted(Exception):
-    """Raised inside an objective wrapper when the evaluation budget is spent."""
-
-
 @dataclass
 class OptimizerResult:
-    """Outcome of one optimizer run (x in [0, 1]^k, theta in physical units)."""
+    """Outcome of one optimizer run (x in [0, 1]^k, theta in physical units).
+
+    n_evaluations counts model evaluations (a two-state point counts 2); history is the
+    best successful objective after each of them (NaN before the first success); extra is
+    plain JSON data. status "failed": no evaluation succeeded, and x_best, theta_best and
+    objective are NaN.
+    """
 
     algorithm: str
     seed: int
@@ -62,32 +69,65 @@ class OptimizerResult:
     extra: dict = field(default_factory=dict)
 
 
-class StallTracker:
-    """Implements the termination rule on the sequence of best-so-far values per iteration."""
+@dataclass
+class Outcome:
+    """What an adapter reports: why it stopped, iterations, message, extra facts, and
+    optionally its own choice of final point (NSGA-II, SNT); by default the final point is
+    the evaluator's best successful point."""
 
-    def __init__(self, budget: Budget):
+    status: str
+    n_iterations: int
+    message: str = ""
+    extra: dict = field(default_factory=dict)
+    x_best: np.ndarray | None = None
+    objective: float | None = None
+
+
+class Termination:
+    """The termination rule of one run (module docstring), fed the best value per iteration.
+
+    ``rules``: which of "stall", "target", "max_iterations" apply (all by default; an
+    adapter whose library does not expose iterations says which it can apply). The
+    evaluation budget always applies, through ``affords``.
+    """
+
+    RULES = ("stall", "target", "max_iterations")
+
+    def __init__(self, budget: Budget, evaluator, rules: tuple[str, ...] = RULES):
+        unknown = set(rules) - set(self.RULES)
+        if unknown:
+            raise ValueError(f"unknown termination rule(s) {sorted(unknown)}; known: {list(self.RULES)}")
         self.budget = budget
+        self.evaluator = evaluator
+        self.rules = frozenset(rules)
         self.best = np.inf
         self.stalled = 0
         self.iterations = 0
+        self.reason: str | None = None
+
+    def affords(self, n_points: int) -> bool:
+        """True if an iteration of ``n_points`` points fits in the evaluation budget."""
+        return self.evaluator.affords(n_points)
 
     def update(self, best: float) -> str | None:
-        """Record the best value after an iteration; return a stop reason or None."""
+        """Record the best value after an iteration; return the stop reason or None."""
         self.iterations += 1
         improvement = self.best - best
         self.stalled = self.stalled + 1 if improvement < self.budget.stall_tolerance else 0
         self.best = min(self.best, best)
-        if self.budget.target_objective is not None and self.best < self.budget.target_objective:
-            return "target"
-        if self.stalled >= self.budget.stall_iterations:
-            return "stalled"
-        if self.budget.max_iterations is not None and self.iterations >= self.budget.max_iterations:
-            return "max_iterations"
-        return None
+        b = self.budget
+        if "target" in self.rules and b.target_objective is not None and self.best < b.target_objective:
+            self.reason = "target"
+        elif "stall" in self.rules and self.stalled >= b.stall_iterations:
+            self.reason = "stalled"
+        elif "max_iterations" in self.rules and b.max_iterations is not None and self.iterations >= b.max_iterations:
+            self.reason = "max_iterations"
+        return self.reason
 
-
-def budget_left(problem, budget: Budget) -> int:
-    return budget.max_evaluations - problem.log.n_evaluations
+    @property
+    def status(self) -> str:
+        """The stop reason; "budget" if no rule fired (the adapter ran out of evaluations)."""
+        return self.reason or "budget"
 
 
 @contextlib.contextmanager
@@ -104,47 +144,57 @@ def seeded_global_numpy(seed: int):
         np.random.set_state(state)
 
 
-class Timer:
-    def __enter__(self):
-        self.start = time.perf_counter()
-        return self
+def json_safe(value):
+    """``value`` with numpy arrays and scalars turned into lists and Python numbers (for JSON)."""
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return json_safe(value.tolist())
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.floating):
+        return float(value)
+    return value
 
-    def __exit__(self, *exc):
-        self.elapsed = time.perf_counter() - self.start
-        return False
 
+def build_result(algorithm: str, evaluator, seed: int, outcome: Outcome, wall_s: float) -> OptimizerResult:
+    """The run's result from its evaluator and the adapter's outcome.
 
-def make_result(
-    algorithm: str,
-    problem,
-    seed: int,
-    wall_s: float,
-    status: str,
-    n_iterations: int,
-    message: str = "",
-    extra: dict | None = None,
-    x_best=None,
-    objective=None,
-) -> OptimizerResult:
-    """Result from the problem's evaluation log (best point over every evaluation counted)."""
-    log = problem.log
+    The final point is the adapter's choice if it made one and that point did not fail,
+    else the evaluator's best successful point. A run without any successful evaluation
+    is ``status="failed"`` with NaN parameters and objective: a failed point is never a result.
+    """
+    x_best, objective = outcome.x_best, outcome.objective
+    if x_best is not None and evaluator.is_failed(x_best):
+        x_best = None
     if x_best is None:
-        x_best = log.best_x if log.best_x is not None else problem.x_initial
-        objective = log.best_objective
-    x_best = np.clip(np.asarray(x_best, float), 0.0, 1.0)
+        x_best, objective = evaluator.best_x, evaluator.best_objective
+    status, message = outcome.status, outcome.message
+    if x_best is None or not evaluator.has_success:
+        x_best = np.full(evaluator.n_params, np.nan)
+        objective = np.nan
+        status = "failed"
+        what = "every evaluation failed" if evaluator.n_evaluations else "no evaluation was made"
+        message = f"{what}: {evaluator.failure_summary()}" if evaluator.n_failed else what
+    else:
+        x_best = np.clip(np.asarray(x_best, float), 0.0, 1.0)
     return OptimizerResult(
         algorithm=algorithm,
         seed=seed,
         x_best=x_best,
-        theta_best=problem.parameters.to_physical(x_best),
+        theta_best=evaluator.parameters.to_physical(x_best),
         objective=float(objective),
-        n_evaluations=log.n_evaluations,
-        n_iterations=int(n_iterations),
+        n_evaluations=evaluator.n_evaluations,
+        n_iterations=int(outcome.n_iterations),
         wall_s=float(wall_s),
         status=status,
         message=message,
-        history=log.best_so_far(),
-        n_failed=log.n_failed,
-        failures=log.failure_summary(),
-        extra=extra or {},
+        history=evaluator.history(),
+        n_failed=evaluator.n_failed,
+        failures=evaluator.failure_summary(),
+        extra=json_safe(outcome.extra),
     )

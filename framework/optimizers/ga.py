@@ -24,7 +24,8 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from framework.optimizers.base import Budget, OptimizerResult, Settings, StallTracker, Timer, make_result
+from framework.optimizers.base import Budget, Outcome, Settings, Termination
+from framework.optimizers.pymoo_problem import pymoo_problem
 
 
 class GASettings(Settings):
@@ -79,21 +80,7 @@ def _operators(s: GASettings):
     return selection, crossover, mutation
 
 
-def pymoo_problem(problem, n_obj: int = 1):
-    """Wrap an updating problem as a pymoo Problem on [0, 1]^k (vectorized evaluation)."""
-    from pymoo.core.problem import Problem
-
-    class _Wrapped(Problem):
-        def __init__(self):
-            super().__init__(n_var=problem.n_params, n_obj=n_obj, xl=0.0, xu=1.0)
-
-        def _evaluate(self, X, out, *args, **kwargs):
-            out["F"] = problem.objective(X)[:, None] if n_obj == 1 else problem.objectives(X)
-
-    return _Wrapped()
-
-
-def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
+def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     from pymoo.algorithms.soo.nonconvex.ga import GA
     from pymoo.operators.sampling.rnd import FloatRandomSampling
     from pymoo.termination.max_gen import MaximumGenerationTermination
@@ -108,26 +95,19 @@ def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
         mutation=mutation,
         eliminate_duplicates=True,
     )
-    tracker = StallTracker(budget)
-    status = "budget"
-    with Timer() as timer:
-        algorithm.setup(
-            pymoo_problem(problem), termination=MaximumGenerationTermination(10**9), seed=seed, verbose=False
-        )
-        generation = 0
-        while problem.log.n_evaluations + s.pop_size <= budget.max_evaluations:
-            algorithm.next()
-            generation += 1
-            stop = tracker.update(float(algorithm.opt[0].F[0]))
-            if stop:
-                status = stop
-                break
-    return make_result(
-        "ga",
-        problem,
-        seed,
-        timer.elapsed,
-        status,
+    termination = Termination(budget, evaluator)
+    algorithm.setup(
+        pymoo_problem(evaluator), termination=MaximumGenerationTermination(10**9), seed=seed, verbose=False
+    )
+    generation = 0
+    while termination.affords(s.pop_size):
+        algorithm.next()
+        generation += 1
+        # best so far over successful evaluations (= the elitist population's best without failures)
+        if termination.update(evaluator.best_objective):
+            break
+    return Outcome(
+        termination.status,
         generation,
         extra={"pop_size": s.pop_size, "selection": s.selection, "crossover": s.crossover},
     )

@@ -17,15 +17,24 @@ it was found. Two kinds of minima are artefacts of the niche radius and flagged 
 whose raw and derated values differ lies inside an earlier niche (``inside_niche``), and one
 that sits on the edge of an earlier niche, |d - r| <= 1 % of r (``on_niche_boundary``),
 where the derating is back to 1 but the search was only stopped by the niche wall.
+
+Budget: ``max_evaluations`` is the total of the whole SNT run. Niche search n (of p) is
+given the evaluations left divided by the niches still to find, so unused evaluations
+roll over to the later searches; the stall and target rules apply to each niche search
+(on its derated objective). The raw Pi of each minimum is recomputed for the report and
+not counted (like a mode table).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass, replace
 
 import numpy as np
 from pydantic import Field
 
 from framework.optimizers import pso
-from framework.optimizers.base import Budget, OptimizerResult, Settings, Timer, make_result
+from framework.optimizers.base import Budget, Outcome, Settings
+from framework.problem import Evaluations
 
 
 class SNTSettings(Settings):
@@ -50,93 +59,108 @@ def derating(X: np.ndarray, minima: list[np.ndarray], r: float, m: float) -> np.
     return G
 
 
-class DeratedProblem:
-    """View of a problem whose objective is derated around given minima (shares the log)."""
+@dataclass(frozen=True)
+class Derated:
+    """Transform of a problem: Pi_n+1(x) = (1 + Pi(x)) / prod_j G(x, s_j) - 1 around ``minima``.
 
-    def __init__(self, problem, minima: list[np.ndarray], r: float, m: float):
-        self.problem, self.minima, self.r, self.m = problem, list(minima), r, m
-        self.parameters = problem.parameters
-        self.n_params = problem.n_params
-        self.x_initial = problem.x_initial
-        self.log = _SubLog(problem.log)
+    Same protocol as the problem (``evaluate(X, runner)``); its Evaluations carry the
+    derated objective (residuals and objective vectors are the problem's own) and, as
+    ``source``, the problem's evaluations, so a run's evaluator records the raw values.
+    A failed point keeps the problem's failure penalty.
+    """
 
-    def objective(self, X: np.ndarray) -> np.ndarray:
-        X = np.atleast_2d(X)
-        raw = self.problem.objective(X)
-        derated = (1.0 + raw) / derating(np.clip(X, 0, 1), self.minima, self.r, self.m) - 1.0
-        self.log.record(X, derated)
-        return derated
-
-
-class _SubLog:
-    """Best derated point of one niche search; counts through the shared problem log."""
-
-    def __init__(self, parent):
-        self.parent = parent
-        self.best_x = None
-        self.best_objective = np.inf
-        self.n_failed = 0
+    problem: object
+    minima: tuple
+    radius: float
+    m: float
 
     @property
-    def n_evaluations(self) -> int:
-        return self.parent.n_evaluations
+    def parameters(self):
+        return self.problem.parameters
 
-    def record(self, X, values) -> None:
-        i = int(np.argmin(values))
-        if values[i] < self.best_objective:
-            self.best_objective, self.best_x = float(values[i]), np.array(X[i])
+    @property
+    def n_params(self) -> int:
+        return self.problem.n_params
 
-    def best_so_far(self):
-        return self.parent.best_so_far()
+    @property
+    def n_objectives(self) -> int:
+        return self.problem.n_objectives
 
-    def failure_summary(self) -> str:
-        return self.parent.failure_summary()
+    @property
+    def x_initial(self) -> np.ndarray:
+        return self.problem.x_initial
+
+    @property
+    def evaluations_per_point(self) -> int:
+        return getattr(self.problem, "evaluations_per_point", 1)
+
+    def value(self, X: np.ndarray, raw: np.ndarray) -> np.ndarray:
+        """Derated objective of points X (n, k) whose raw objective is ``raw``."""
+        return (1.0 + raw) / derating(np.clip(X, 0, 1), list(self.minima), self.radius, self.m) - 1.0
+
+    def evaluate(self, X: np.ndarray, runner=None) -> Evaluations:
+        ev = self.problem.evaluate(X, runner)
+        X = np.clip(np.atleast_2d(np.asarray(X, float)), 0.0, 1.0)
+        derated = np.where(ev.ok, self.value(X, ev.objective), ev.objective)
+        return replace(ev, objective=derated, source=ev)
 
 
-def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
+def derated(problem, minima, radius: float, m: float) -> Derated:
+    """``problem`` derated around the points ``minima`` (normalized) with niche radius and m."""
+    return Derated(problem, tuple(np.asarray(s_, float) for s_ in minima), float(radius), float(m))
+
+
+def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     s = SNTSettings(**settings)
-    r = s.niche_radius or niche_radius(problem.n_params, s.n_minima)
+    problem = evaluator.problem
+    r = s.niche_radius or niche_radius(evaluator.n_params, s.n_minima)
     minima: list[np.ndarray] = []
     records = []
     iterations = 0
-    with Timer() as timer:
-        for n in range(s.n_minima):
-            view = DeratedProblem(problem, minima, r, s.derating_m)
-            used = problem.log.n_evaluations
-            sub_budget = budget.model_copy(update={"max_evaluations": used + budget.max_evaluations})
-            sub = pso.run(view, seed + 1000 * n, sub_budget, **s.pso)
-            iterations += sub.n_iterations
-            x = np.clip(view.log.best_x, 0, 1)
-            raw = problem.objective1(x)
-            derated = (1.0 + raw) / float(derating(x[None, :], minima, r, s.derating_m)[0]) - 1.0
-            distances = [float(np.linalg.norm(x - m_)) for m_ in minima]
-            # a search pushed out of a niche often stops right on its edge (d = r), where the
-            # derating is 1 again: raw == derated, yet the point is an artefact of the radius
-            on_boundary = bool(any(abs(d - r) <= s.boundary_tolerance * r for d in distances))
-            records.append(
-                {
-                    "minimum": n + 1,
-                    "x": x.tolist(),
-                    "theta": problem.parameters.to_physical(x).tolist(),
-                    "raw_objective": raw,
-                    "derated_objective": derated,
-                    "inside_niche": bool(not np.isclose(raw, derated, rtol=1e-9, atol=1e-15)),
+    for n in range(s.n_minima):
+        share = int(evaluator.remaining // (s.n_minima - n))
+        if share <= 0:
+            break
+        view = derated(problem, minima, r, s.derating_m)
+        sub_evaluator = evaluator.child(view, share)
+        sub_budget = budget.model_copy(update={"max_evaluations": share})
+        sub = pso.run(sub_evaluator, seed + 1000 * n, sub_budget, **s.pso)
+        iterations += sub.n_iterations
+        if sub_evaluator.best_x is None:  # no successful evaluation in this niche search
+            records.append({"minimum": n + 1, "failed": True, "n_evaluations": sub_evaluator.n_evaluations,
+                            "status": sub.status})  # fmt: skip
+            continue
+        x = np.clip(sub_evaluator.best_x, 0, 1)
+        raw = float(problem.evaluate(x[None, :], evaluator.runner).objective[0])
+        derated_value = float(view.value(x[None, :], np.array([raw]))[0])
+        distances = [float(np.linalg.norm(x - m_)) for m_ in minima]
+        # a search pushed out of a niche often stops right on its edge (d = r), where the
+        # derating is 1 again: raw == derated, yet the point is an artefact of the radius
+        on_boundary = bool(any(abs(d - r) <= s.boundary_tolerance * r for d in distances))
+        inside = bool(not np.isclose(raw, derated_value, rtol=1e-9, atol=1e-15))
+        records.append(
+            {
+                "minimum": n + 1,
+                "x": x.tolist(),
+                "theta": problem.parameters.to_physical(x).tolist(),
+                "raw_objective": raw,
+                "derated_objective": derated_value,
+                "inside_niche": inside,
                 "on_niche_boundary": on_boundary,
-                "artefact": bool(not np.isclose(raw, derated, rtol=1e-9, atol=1e-15)) or on_boundary,
-                    "distance_to_previous": distances,
-                    "n_evaluations": problem.log.n_evaluations - used,
-                }
-            )
-            minima.append(x)
-    best = min(records, key=lambda rec: rec["raw_objective"])
-    return make_result(
-        "snt",
-        problem,
-        seed,
-        timer.elapsed,
-        "completed",
+                "artefact": inside or on_boundary,
+                "distance_to_previous": distances,
+                "n_evaluations": sub_evaluator.n_evaluations,
+                "status": sub.status,
+            }
+        )
+        minima.append(x)
+    found = [rec for rec in records if not rec.get("failed")]
+    best = min(found, key=lambda rec: rec["raw_objective"]) if found else None
+    return Outcome(
+        "completed" if len(records) == s.n_minima else "budget",
         iterations,
+        message=f"{len(found)} of {s.n_minima} minima found",
         extra={"minima": records, "niche_radius": r, "derating_m": s.derating_m},
-        x_best=np.array(best["x"]),
-        objective=best["raw_objective"],
+        x_best=np.array(best["x"]) if best else None,
+        objective=best["raw_objective"] if best else None,
     )

@@ -4,9 +4,14 @@ Mapping of the source's settings (MATLAB ``gamultiobj`` style) onto pymoo's NSGA
 
 - population ``pop_size`` (500), ``n_generations`` (200): pymoo evaluates the initial
   population in generation 1 and ``pop_size`` offspring in each later generation, so a
-  run costs pop_size x n_generations evaluations; fewer generations are run when
-  ``budget.max_evaluations`` is smaller (the stall and target rules of the budget do not
-  apply to a population-based multi-objective search and are ignored).
+  run costs pop_size x n_generations points; fewer generations are run when
+  ``budget.max_evaluations`` is smaller (status "budget").
+- termination: the shared rule (:class:`~framework.optimizers.base.Termination`) after
+  every generation, on the best scalar objective Pi evaluated so far (the smallest sum of
+  the objectives Pi_f + Pi_MAC, or Pi_1 + Pi_2 for two damage states, plus penalty terms):
+  "stalled" when it improved by less than ``stall_tolerance`` over ``stall_iterations``
+  generations, "target" below ``target_objective``, "max_iterations" after
+  ``max_iterations`` generations; "max_generations" when all generations ran.
 - crossover probability 0.8: simulated binary crossover ``SBX(prob=0.8)`` (probability
   that a mating pair is recombined; pymoo's default eta = 15).
 - mutation 0.01: polynomial mutation applied to every offspring, each variable mutated
@@ -24,7 +29,9 @@ Mapping of the source's settings (MATLAB ``gamultiobj`` style) onto pymoo's NSGA
 
 ``result.extra`` holds ``pareto_F`` (n_front, n_obj), ``pareto_X`` (normalized x),
 ``ideal_F``, ``nadir_F``, ``chosen_index``, ``chosen_F``, ``generations_run`` and the
-settings used; ``result.objective`` is the sum of the chosen point's objectives.
+settings used (plain lists and numbers); ``result.objective`` is the sum of the chosen
+point's objectives. Failed points (whatever their penalty) are removed from the front
+before the choice.
 """
 
 from __future__ import annotations
@@ -35,7 +42,8 @@ import math
 import numpy as np
 from pydantic import Field
 
-from framework.optimizers.base import Budget, OptimizerResult, Settings, Timer, make_result
+from framework.optimizers.base import Budget, Outcome, Settings, Termination
+from framework.optimizers.pymoo_problem import pymoo_problem
 
 log = logging.getLogger(__name__)
 
@@ -92,18 +100,15 @@ def _survival_class():
     return ParetoFractionSurvival
 
 
-def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
-    """NSGA-II on ``problem.objectives``; final point nearest the ideal point of the front."""
+def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
+    """NSGA-II on ``evaluator.objectives``; final point nearest the ideal point of the front."""
     from pymoo.algorithms.moo.nsga2 import NSGA2
-    from pymoo.core.problem import Problem
     from pymoo.operators.crossover.sbx import SBX
     from pymoo.operators.mutation.pm import PM
-    from pymoo.optimize import minimize
+    from pymoo.termination.max_gen import MaximumGenerationTermination
 
     s = NSGA2Settings(**settings)
-    k = problem.n_params
-    n_obj = int(getattr(problem, "n_objectives", 2))
-    n_gen = min(s.n_generations, max(1, budget.max_evaluations // s.pop_size))
+    n_gen = min(s.n_generations, max(1, budget.max_evaluations // (s.pop_size * evaluator.cost)))
     if n_gen < s.n_generations:
         log.info(
             "nsga2: budget of %d evaluations allows %d of %d generations",
@@ -111,14 +116,6 @@ def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
             n_gen,
             s.n_generations,
         )
-
-    class _Wrapped(Problem):
-        def __init__(self):
-            super().__init__(n_var=k, n_obj=n_obj, xl=np.zeros(k), xu=np.ones(k))
-
-        def _evaluate(self, X, out, *args, **kwargs):
-            out["F"] = np.asarray(problem.objectives(X), dtype=float)
-
     algorithm = NSGA2(
         pop_size=s.pop_size,
         crossover=SBX(prob=s.crossover_prob, eta=s.crossover_eta),
@@ -126,10 +123,25 @@ def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
         survival=_survival_class()(s.first_front_fraction),
         eliminate_duplicates=True,
     )
-    with Timer() as timer:
-        res = minimize(_Wrapped(), algorithm, ("n_gen", n_gen), seed=int(seed) % (2**32), verbose=False)
+    termination = Termination(budget, evaluator)
+    algorithm.setup(
+        pymoo_problem(evaluator, n_obj=evaluator.n_objectives),
+        termination=MaximumGenerationTermination(n_gen),
+        seed=int(seed) % (2**32),
+        verbose=False,
+    )
+    generation = 0
+    while algorithm.has_next() and termination.affords(s.pop_size):
+        algorithm.next()
+        generation += 1
+        if termination.update(evaluator.best_objective):
+            break
+    res = algorithm.result()
     front_F = np.atleast_2d(np.asarray(res.F, dtype=float))
     front_X = np.atleast_2d(np.asarray(res.X, dtype=float))
+    keep = np.array([not evaluator.is_failed(x) for x in front_X], dtype=bool)
+    if keep.any():
+        front_F, front_X = front_F[keep], front_X[keep]
     chosen = nearest_to_ideal(front_F)
     extra = {
         "pareto_F": front_F,
@@ -139,11 +151,13 @@ def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
         "chosen_index": chosen,
         "chosen_F": front_F[chosen],
         **s.model_dump(),
-        "generations_run": n_gen,
+        "generations_run": generation,
     }
-    status = "budget" if n_gen < s.n_generations else "max_generations"
-    return make_result(
-        "nsga2", problem, seed, timer.elapsed, status, n_gen,
-        message=f"{len(front_F)} points on the final front",
-        extra=extra, x_best=front_X[chosen], objective=float(front_F[chosen].sum()),
+    if termination.reason is not None:
+        status = termination.reason
+    else:
+        status = "max_generations" if generation >= s.n_generations else "budget"
+    return Outcome(
+        status, generation, message=f"{len(front_F)} points on the final front", extra=extra,
+        x_best=front_X[chosen] if keep.any() else None, objective=float(front_F[chosen].sum()),
     )  # fmt: skip

@@ -22,15 +22,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from framework.optimizers.base import (
-    Budget,
-    OptimizerResult,
-    Settings,
-    StallTracker,
-    Timer,
-    make_result,
-    seeded_global_numpy,
-)
+from framework.optimizers.base import Budget, Outcome, Settings, Termination, seeded_global_numpy
 
 
 class PSOSettings(Settings):
@@ -68,7 +60,8 @@ def _keep_logging():
                 lg.disabled = disabled.get(name, False)
 
 
-def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
+def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
+    s = PSOSettings(**settings)
     with _keep_logging():
         from pyswarms.backend.generators import create_swarm
         from pyswarms.backend.handlers import BoundaryHandler, VelocityHandler
@@ -76,17 +69,15 @@ def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
         from pyswarms.backend.topology import Star
 
         topology = Star()
-        bh = BoundaryHandler(strategy=PSOSettings(**settings).boundary)
+        bh = BoundaryHandler(strategy=s.boundary)
         vh = VelocityHandler(strategy="unmodified")
-    s = PSOSettings(**settings)
-    k = problem.n_params
+    k = evaluator.n_params
     bounds = (np.zeros(k), np.ones(k))
     w0, c1, c2 = s.factor * s.inertia, s.factor * s.c1, s.factor * s.c2
     clamp = (-s.velocity_clamp, s.velocity_clamp)
-    tracker = StallTracker(budget)
+    termination = Termination(budget, evaluator)
     max_iter = budget.max_iterations or max(1, budget.max_evaluations // s.swarm_size)
-    status = "budget"
-    with Timer() as timer, seeded_global_numpy(seed):
+    with seeded_global_numpy(seed):
         swarm = create_swarm(
             n_particles=s.swarm_size,
             dimensions=k,
@@ -95,28 +86,22 @@ def run(problem, seed: int, budget: Budget, **settings) -> OptimizerResult:
             clamp=clamp,
         )
         if s.include_initial:
-            swarm.position[0] = problem.x_initial
+            swarm.position[0] = evaluator.x_initial
         swarm.pbest_cost = np.full(s.swarm_size, np.inf)
         iteration = 0
-        while problem.log.n_evaluations + s.swarm_size <= budget.max_evaluations:
+        while termination.affords(s.swarm_size):
             if s.inertia_schedule == "linear":
                 swarm.options["w"] = w0 + (s.inertia_end * s.factor - w0) * min(1.0, iteration / max_iter)
-            swarm.current_cost = problem.objective(swarm.position)
+            swarm.current_cost = evaluator.objective(swarm.position)
             swarm.pbest_pos, swarm.pbest_cost = compute_pbest(swarm)
             swarm.best_pos, swarm.best_cost = topology.compute_gbest(swarm)
             iteration += 1
-            stop = tracker.update(float(swarm.best_cost))
-            if stop:
-                status = stop
+            # the global best so far, over successful evaluations only (= swarm.best_cost
+            # without failures): a failed point's penalty never meets the target
+            if termination.update(evaluator.best_objective):
                 break
             swarm.velocity = topology.compute_velocity(swarm, clamp, vh, bounds)
             swarm.position = topology.compute_position(swarm, bounds, bh)
-    return make_result(
-        "pso",
-        problem,
-        seed,
-        timer.elapsed,
-        status,
-        iteration,
-        extra={"swarm_size": s.swarm_size, "w": w0, "c1": c1, "c2": c2},
+    return Outcome(
+        termination.status, iteration, extra={"swarm_size": s.swarm_size, "w": w0, "c1": c1, "c2": c2}
     )

@@ -30,7 +30,7 @@ from framework.errors import InputError, ModelEvaluationError
 from framework.exchange import load_measured
 from framework.measurements import MeasuredModes
 from framework.models.registry import builtin_measured, is_reference, make_structure
-from framework.objectives import ObjectiveSpec, RatioConstraint
+from framework.objectives import ObjectiveSpec
 from framework.optimizers import OPTIMIZERS, Budget, run_optimizer, settings_model
 from framework.parameters import ParameterSet
 from framework.problem import UpdatingProblem
@@ -105,28 +105,6 @@ class ParametersConfig(Strict):
     bounds: dict[str, Bounds] = Field(default_factory=dict)
 
 
-class RatioConstraintConfig(Strict):
-    numerator: str
-    denominator: str
-    weight: float = Field(2e-4, ge=0)
-
-
-class ObjectiveConfig(Strict):
-    alpha: float = Field(1.0, ge=0)
-    beta: float = Field(1.0, ge=0)
-    use_shapes: bool = True
-    pairing: Literal["mac", "order", "frequency"] = "mac"
-    mac_threshold: float = Field(0.5, ge=0, le=1)
-    frequency_window: float | None = Field(None, gt=0)
-    unmatched_penalty: float = Field(1.0, ge=0)
-    failure_penalty: float = Field(1e3, gt=0)
-    ratio_constraints: list[RatioConstraintConfig] = Field(default_factory=list)
-    regularization_tau: float = Field(0.0, ge=0)
-    regularization_space: Literal["ratio", "normalized"] = "ratio"
-    formulation: str = "spec"
-    options: dict[str, Any] = Field(default_factory=dict)
-
-
 class BudgetConfig(Budget):
     """The optimizers' budget and termination rule, read with strict types."""
 
@@ -171,7 +149,7 @@ class Config(StudyHeader):
     measured: MeasuredConfig
     validation: list[ValidationCase] = Field(default_factory=list)
     parameters: ParametersConfig = Field(default_factory=ParametersConfig)
-    objective: ObjectiveConfig = Field(default_factory=ObjectiveConfig)
+    objective: ObjectiveSpec = Field(default_factory=ObjectiveSpec)
     budget: BudgetConfig = Field(default_factory=BudgetConfig)
     algorithms: dict[str, AlgorithmConfig]
 
@@ -281,9 +259,7 @@ def measured_from(cfg: dict) -> MeasuredModes:
 
 
 def objective_from(cfg: dict) -> ObjectiveSpec:
-    data = dict(cfg)
-    data["ratio_constraints"] = tuple(RatioConstraint(**c) for c in data.get("ratio_constraints", []))
-    return ObjectiveSpec(**data)
+    return ObjectiveSpec(**cfg)
 
 
 def parameters_from(model, cfg: dict) -> ParameterSet:
@@ -295,14 +271,14 @@ def parameters_from(model, cfg: dict) -> ParameterSet:
     return params
 
 
-def build_problem(task: dict, structure_options: dict | None = None, measured_cfg: dict | None = None,
-                  runner=None) -> UpdatingProblem:
+def build_problem(task: dict, structure_options: dict | None = None, measured_cfg: dict | None = None
+                  ) -> UpdatingProblem:
     """The updating problem of a task (or of one of its validation cases)."""
     options = {**task["structure"]["options"], **(structure_options or {})}
     model = make_structure(task["structure"]["name"], **options)
     measured = measured_from(measured_cfg or task["measured"])
     return UpdatingProblem(model, measured, parameters_from(model, task["parameters"]),
-                           objective_from(task["objective"]), runner=runner)
+                           objective_from(task["objective"]))
 
 
 def preflight(specs: list[dict], build_references: bool = True) -> None:
@@ -380,12 +356,11 @@ def run(spec: dict) -> dict[str, list[dict]]:
 
 def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
-    problem = build_problem(task, runner=runner)
+    problem = build_problem(task)
     bar = _evaluation_bar(spec)
-    if bar is not None:
-        problem.log.on_record = bar.update
     try:
-        result = run_optimizer(task["algorithm"], problem, spec["seed"], Budget(**task["budget"]), **task["settings"])
+        result = run_optimizer(task["algorithm"], problem, spec["seed"], Budget(**task["budget"]), runner=runner,
+                               progress=bar.update if bar is not None else None, **task["settings"])
     finally:
         if bar is not None:
             bar.close()
@@ -413,13 +388,12 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
         tables["parameters"].append({"parameter": p.name, "unit": p.unit, "initial": p.initial, "lower": p.lower,
                                      "upper": p.upper, "value": float(value), "ratio": float(ratio),
                                      "normalized": float(x)})
-    tables["modes"] += mode_rows("base", problem, result.theta_best)
+    tables["modes"] += mode_rows("base", problem, result.theta_best, runner)
     theta = params.as_dict(result.theta_best)
     for case in task.get("validation", []):
         try:
-            vproblem = build_problem(task, structure_options=case["structure_options"], measured_cfg=case["measured"],
-                                     runner=runner)
-            tables["modes"] += mode_rows(case["case"], vproblem, vproblem.parameters.from_dict(theta))
+            vproblem = build_problem(task, structure_options=case["structure_options"], measured_cfg=case["measured"])
+            tables["modes"] += mode_rows(case["case"], vproblem, vproblem.parameters.from_dict(theta), runner)
         except Exception as exc:  # a failed prediction is a row, not the end of the run
             tables["modes"].append({"case": case["case"], "mode": 0, "error": f"{type(exc).__name__}: {exc}"})
     return tables
@@ -444,15 +418,16 @@ def history_rows(history: np.ndarray) -> list[dict]:
     history = np.asarray(history, float)
     if history.size == 0:
         return []
-    keep = np.flatnonzero(np.r_[True, np.diff(history) < 0])
+    known = np.where(np.isnan(history), np.inf, history)  # NaN: no successful evaluation yet
+    keep = np.flatnonzero(np.r_[True, known[1:] < known[:-1]])
     if keep[-1] != history.size - 1:
         keep = np.r_[keep, history.size - 1]
     return [{"evaluation": int(i + 1), "best_objective": float(history[i])} for i in keep]
 
 
-def mode_rows(case: str, problem: UpdatingProblem, theta: np.ndarray) -> list[dict]:
+def mode_rows(case: str, problem: UpdatingProblem, theta: np.ndarray, runner=None) -> list[dict]:
     try:
-        table = problem.mode_table(theta)
+        table = problem.mode_table(theta, runner=runner)
     except ModelEvaluationError as exc:
         return [{"case": case, "mode": 0, "error": str(exc)}]
     table = table.rename(columns={"label": "mode_label"})

@@ -1,0 +1,167 @@
+"""The per-run evaluator: what one optimizer run has evaluated, and what it may still spend.
+
+An :class:`Evaluator` wraps a (stateless) problem for one run, like pymoo's ``Evaluator``:
+``run_optimizer`` creates one per run and gives it to the adapter, which sees the problem
+only through it. It counts model evaluations (a problem point costs
+``problem.evaluations_per_point`` of them: 1, or 2 for a two-state point), keeps the
+best point over the *successful* evaluations only (a failed point is never a result,
+whatever its penalty), the best-so-far history per model evaluation, the failure
+reasons (a Counter and one example message each) and the budget: an evaluation that
+would exceed ``max_evaluations`` raises :class:`BudgetExhausted` before any model runs,
+and ``affords(n)`` / ``remaining`` let an adapter plan. ``progress(n_new)`` is called
+with the number of new model evaluations (e.g. a progress bar).
+
+A child evaluator (``evaluator.child(problem, max_evaluations)``) serves a sub-search on a
+transformed problem (SNT's derated objective): it has its own best point and budget, and
+every evaluation also counts in the parent, which records the untransformed values
+(``Evaluations.source``).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Callable
+
+import numpy as np
+
+from framework.problem import Evaluations, Runner, as_points
+
+
+class BudgetExhausted(Exception):
+    """Raised before an evaluation that would exceed the run's evaluation budget."""
+
+
+class Evaluator:
+    """Counted, budgeted access to ``problem.evaluate`` for one optimizer run."""
+
+    def __init__(
+        self,
+        problem,
+        max_evaluations: int | None = None,
+        runner: Runner | None = None,
+        progress: Callable[[int], object] | None = None,
+        parent: Evaluator | None = None,
+    ):
+        self.problem = problem
+        self.max_evaluations = max_evaluations
+        self.runner = runner if parent is None else parent.runner
+        self.progress = progress
+        self.parent = parent
+        self.cost = int(getattr(problem, "evaluations_per_point", 1))
+        self.n_evaluations = 0  # model evaluations
+        self.failures: Counter[str] = Counter()
+        self.failure_examples: dict[str, str] = {}
+        self.best_x: np.ndarray | None = None
+        self.best_objective = np.inf
+        self._values: list[np.ndarray] = []  # objective per evaluated point, NaN where it failed
+        self._failed: set[bytes] = set()
+
+    # ---- facts of the problem ---------------------------------------------------------
+    @property
+    def n_params(self) -> int:
+        return self.problem.n_params
+
+    @property
+    def n_objectives(self) -> int:
+        return int(getattr(self.problem, "n_objectives", 1))
+
+    @property
+    def parameters(self):
+        return self.problem.parameters
+
+    @property
+    def x_initial(self) -> np.ndarray:
+        return self.problem.x_initial
+
+    # ---- budget ---------------------------------------------------------------------------
+    @property
+    def remaining(self) -> float:
+        """Model evaluations left (inf without a budget); a child is also bound by its parent."""
+        own = np.inf if self.max_evaluations is None else self.max_evaluations - self.n_evaluations
+        return min(own, self.parent.remaining) if self.parent is not None else own
+
+    def affords(self, n_points: int) -> bool:
+        """True if ``n_points`` points can still be evaluated within the budget."""
+        return n_points * self.cost <= self.remaining
+
+    def child(self, problem, max_evaluations: int | None = None) -> Evaluator:
+        """Evaluator of a sub-search on ``problem`` (a transform of this one) that counts here too."""
+        return Evaluator(problem, max_evaluations, parent=self)
+
+    # ---- evaluation -----------------------------------------------------------------------
+    def evaluate(self, X: np.ndarray) -> Evaluations:
+        """Evaluate points X (n, k), counted; raises BudgetExhausted if they do not fit."""
+        X = as_points(X, self.n_params)
+        if not self.affords(len(X)):
+            raise BudgetExhausted(f"{len(X)} point(s) do not fit the {self.remaining} evaluations left")
+        ev = self.problem.evaluate(X, self.runner)
+        self._record(X, ev)
+        return ev
+
+    def _record(self, X: np.ndarray, ev: Evaluations) -> None:
+        n_new = len(X) * self.cost
+        self.n_evaluations += n_new
+        values = np.where(ev.ok, ev.objective, np.nan)
+        self._values.append(values)
+        for x, reason, detail in zip(X, ev.reasons, ev.details):
+            if reason is not None:
+                self.failures[reason] += 1
+                self.failure_examples.setdefault(reason, detail)
+                self._failed.add(np.asarray(x, float).tobytes())
+        if np.any(ev.ok):
+            i = int(np.nanargmin(values))
+            if values[i] < self.best_objective:
+                self.best_objective = float(values[i])
+                self.best_x = np.array(X[i], dtype=float)
+        if self.parent is not None:
+            self.parent._record(X, ev.source if ev.source is not None else ev)
+        elif self.progress is not None:
+            self.progress(n_new)
+
+    # the three views used by the adapters
+    def objective(self, X: np.ndarray) -> np.ndarray:
+        """Scalar objective Pi of each row of X (n, k) -> (n,)."""
+        return self.evaluate(X).objective
+
+    def objective1(self, x: np.ndarray) -> float:
+        """Scalar objective of one point x (k,)."""
+        return float(self.evaluate(np.asarray(x, float)[None, :]).objective[0])
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        """Residual vector of one point (sum of squares = Pi)."""
+        return self.evaluate(np.asarray(x, float)[None, :]).residuals[0]
+
+    def objectives(self, X: np.ndarray) -> np.ndarray:
+        """Objective vectors (n, n_objectives) of the rows of X."""
+        return self.evaluate(X).objectives
+
+    # ---- what the run did -----------------------------------------------------------------
+    @property
+    def n_failed(self) -> int:
+        """Number of failed points."""
+        return sum(self.failures.values())
+
+    @property
+    def has_success(self) -> bool:
+        return self.best_x is not None
+
+    def is_failed(self, x: np.ndarray) -> bool:
+        """True if the point x (as evaluated, in [0, 1]^k) failed in this run."""
+        return np.clip(np.asarray(x, float), 0.0, 1.0).tobytes() in self._failed
+
+    def history(self) -> np.ndarray:
+        """Best objective so far after each model evaluation (NaN before the first success).
+
+        A point that costs c model evaluations is known after the last of them: its value
+        enters the history at that evaluation.
+        """
+        if not self._values:
+            return np.array([])
+        best = np.fmin.accumulate(np.concatenate(self._values))
+        if self.cost == 1:
+            return best
+        before = np.r_[np.nan, best[:-1]]
+        return np.column_stack([np.repeat(before[:, None], self.cost - 1, axis=1), best[:, None]]).ravel()
+
+    def failure_summary(self) -> str:
+        return "; ".join(f"{k} x{v} ({self.failure_examples[k]})" for k, v in sorted(self.failures.items()))
