@@ -29,6 +29,10 @@ log = logging.getLogger(__name__)
 ANALYSES: dict[str, str] = {
     "selection": "framework.analysis.selection",
     "minima": "framework.analysis.minima",
+    "comparison": "framework.analysis.comparison",
+    "sensitivity": "framework.analysis.sensitivity",
+    "modes": "framework.analysis.modes",
+    "updating_summary": "framework.analysis.updating_summary",
 }
 
 
