@@ -24,9 +24,9 @@ from framework.io import save_figure
 
 
 def _select(df: pd.DataFrame | None, variants: list[str] | None) -> pd.DataFrame | None:
-    if df is None or df.empty:
-        return None
-    return df[df["variant"].isin(variants)] if variants else df
+    if df is not None and variants:
+        df = df[df["variant"].isin(variants)]
+    return None if df is None or df.empty else df
 
 
 def _panels(df: pd.DataFrame) -> list[tuple[str, str]]:

@@ -168,6 +168,9 @@ def preflight(specs: list[dict]) -> None:
         try:
             problem = build_problem(spec["task"])
             point_theta(problem.parameters, spec["task"]["point"], spec["label"])
+            if "type" in spec["task"]["pairings"] and "mode_types" not in (problem.measured.meta or {}):
+                raise InputError(f"pairings: 'type' needs the measured mode types (meta.mode_types) in "
+                                 f"{problem.measured.source}")
             for case in spec["task"]["validation"]:
                 build_problem(spec["task"], structure_options=case["structure_options"], measured_cfg=case["measured"])
         except InputError as exc:
