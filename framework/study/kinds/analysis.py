@@ -32,7 +32,8 @@ One run per point (its ``label`` is the point's name, per variant of the study).
   rho_jk = C_jk / sqrt(C_jj C_kk), C = (S^T S)^+, of a linearized least-squares fit.
 
 Every structure option that is a scalar is also a column (e.g. cable_elements). A point
-lying outside the parameters' bounds is an input error (the problem would clip it).
+lying outside the parameters' bounds is an input error (the problem would clip it). Nothing
+here is random: the header's ``runs`` is not used and ``seed`` only names the runs.
 """
 
 from __future__ import annotations
@@ -183,8 +184,7 @@ def point_theta(params, point: dict, name: str = "") -> np.ndarray:
     """Physical parameter vector of a point; InputError for an unknown name or a value
     outside the bounds (the evaluation would silently clip it)."""
     theta = params.initial.astype(float).copy()
-    given = {**point.get("values", {}), **{k: None for k in point.get("ratios", {})}}
-    unknown = sorted(set(given) - set(params.names))
+    unknown = sorted((set(point.get("values", {})) | set(point.get("ratios", {}))) - set(params.names))
     if unknown:
         raise InputError(f"points.{name}: {unknown} are not parameters of the study; known: {params.names}")
     for k, value in point.get("values", {}).items():
