@@ -177,3 +177,24 @@ def test_cli_runs_an_analysis_config_and_report_redraws_its_figures(tmp_path):
     assert top.loc["kyy", "mode_of_max"] == "1st y" and top["rank"].min() == 1
     modes = pd.read_csv(out / "mode_summary.csv")
     assert (modes["matched"] == 3).all()
+
+
+def test_comparison_takes_the_best_run_that_did_not_fail_of_each_model():
+    from framework.analysis import comparison
+
+    runs = pd.DataFrame({"run_id": list("abcd"), "label": "pso", "variant": ["x", "x", "y", "y"],
+                         "structure": ["s1", "s1", "s2", "s2"], "swarm_size": 20, "seed": [0, 1, 0, 1],
+                         "objective": [2.0, 1.0, 0.5, 3.0], "n_evaluations": 10,
+                         "status": ["stalled", "stalled", "failed", "stalled"]})
+    parameters = pd.DataFrame({"run_id": list("abcd"), "parameter": "k", "value": [1.0, 2.0, 3.0, 4.0]})
+    modes = pd.DataFrame({"run_id": [r for r in "abcd" for _ in range(2)], "case": "base", "mode": [1, 2] * 4,
+                          "mode_label": ["m1", "m2"] * 4, "f_measured_hz": 1.0, "f_model_hz": 1.01,
+                          "error_pct": [1.0, -2.0] * 4, "mac": 0.99, "matched": True})
+    out = comparison.tables({"runs": runs, "parameters": parameters, "modes": modes})
+    best = out["comparison_runs"].set_index("model")
+    assert best.loc["x", "run_id"] == "b" and best.loc["y", "run_id"] == "d"  # the failed run c is left out
+    assert best.loc["x", "k"] == 2.0 and best.loc["y", "runs"] == 1
+    assert best.loc["y", "structure"] == "s2" and "swarm_size" not in best  # only settings that differ
+    summary = out["comparison_summary"].set_index("model")
+    assert summary.loc["x", "max_abs_error_pct"] == 2.0 and summary.loc["x", "matched"] == 2
+    assert len(out["comparison"]) == 4

@@ -7,9 +7,9 @@ detailed frame against the 3-DOF model; studies/lab_frame_detailed_inset.yaml: o
 (default: the variant); its best run is the one with the lowest objective among the runs
 that did not fail. Tables:
 
-- ``comparison_runs``: one row per model: its best run (label, seed, run_id, objective,
-  n_evaluations, status), the number of runs and the updated value of every parameter
-  (one column per parameter);
+- ``comparison_runs``: one row per model: the settings that tell the models apart (e.g.
+  structure, a swept option), its best run (label, seed, run_id, objective, n_evaluations,
+  status), the number of runs and the updated value of every parameter (one column each);
 - ``comparison``: model x case x mode of the best runs: f_measured_hz, f_model_hz,
   error_pct, mac, matched;
 - ``comparison_summary``: model x case: modes, matched modes, max |error_pct|, min MAC.
@@ -33,13 +33,31 @@ def _model_names(df: pd.DataFrame, by: list[str]) -> pd.Series:
     return df[by].astype(str).agg(", ".join, axis=1) if len(by) > 1 else df[by[0]].astype(str)
 
 
+#: columns of the runs table that are results or bookkeeping, not settings of a model
+RESULT_COLUMNS = {"run_id", "study", "kind", "label", "seed", "objective", "n_evaluations", "n_iterations", "wall_s",
+                  "status", "error", "n_failed_evaluations", "failures", "message", "condition_number", "traceback"}
+
+
+def setting_columns(runs: pd.DataFrame, groups: pd.Series) -> list[str]:
+    """Setting columns that tell the groups apart: one value within each group, several overall."""
+    out = []
+    for c in runs.columns:
+        if c in RESULT_COLUMNS or runs[c].nunique(dropna=False) < 2:
+            continue
+        if (runs.groupby(groups)[c].nunique(dropna=False) <= 1).all():
+            out.append(c)
+    return out
+
+
 def best_runs(runs: pd.DataFrame, by: list[str]) -> pd.DataFrame:
-    """The lowest-objective run of each group of ``runs`` (failed runs left out)."""
+    """The lowest-objective run of each group of ``runs`` (failed runs left out), with the
+    setting columns that tell the groups apart (e.g. structure, a swept option)."""
     ok = runs[~runs["status"].isin(FAILED) & runs["objective"].notna()]
     ok = ok.assign(model=_model_names(ok, by))
     best = ok.loc[ok.groupby("model", sort=False)["objective"].idxmin()]
     counts = ok.groupby("model", sort=False).size().rename("runs")
-    keep = ["model", *by, "label", "seed", "run_id", "objective", "n_evaluations", "status"]
+    keep = ["model", *by, *setting_columns(ok.drop(columns="model"), ok["model"]), "label", "seed", "run_id",
+            "objective", "n_evaluations", "status"]
     return best[list(dict.fromkeys(keep))].merge(counts, on="model").reset_index(drop=True)
 
 
