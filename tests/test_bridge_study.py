@@ -113,3 +113,32 @@ def test_committed_updated_point_is_the_sm_result_of_the_cable_study():
     sm4 = params[params["cable_elements"] == 4].set_index("parameter")["ratio"]
     for name in NAMES:
         assert ratios[name] == pytest.approx(sm4[name], rel=1e-12), name
+
+
+def test_bridge_analysis_gives_the_same_tables_on_dask_and_after_resume(tmp_path):
+    """The ported study (kind analysis, OpenSees fast path): serial = Dask = resumed."""
+    distributed = pytest.importorskip("distributed")
+    data = load(ROOT / "studies" / "bridge_analysis.yaml").model_dump(mode="json")
+    data.update(variants={}, validation=[], pairings=["objective"], report={})
+    data["execution"]["progress"] = False
+    names = ("points", "modes", "sensitivity", "identifiability", "parameter_correlation")
+
+    def tables(name, **execution):
+        cfg = validate({**data, "output": str(tmp_path / name), "execution": {**data["execution"], **execution}})
+        run_study(cfg, figures=False)
+        return {t: pd.read_csv(tmp_path / name / f"{t}.csv").drop(columns="wall_s", errors="ignore") for t in names}
+
+    serial = tables("serial")
+    assert len(serial["points"]) == 2 and len(serial["sensitivity"]) == 2 * 6 * 8
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    try:
+        dask = tables("dask", backend="dask", scheduler=cluster.scheduler_address)
+    finally:
+        cluster.close()
+    next((tmp_path / "serial" / "_runs").glob("*.json")).unlink()
+    cfg = validate({**data, "output": str(tmp_path / "serial")})
+    run_study(cfg, resume=True, figures=False)
+    resumed = {t: pd.read_csv(tmp_path / "serial" / f"{t}.csv").drop(columns="wall_s", errors="ignore") for t in names}
+    for name in names:
+        pd.testing.assert_frame_equal(serial[name], dask[name], check_exact=True)
+        pd.testing.assert_frame_equal(serial[name], resumed[name], check_exact=True)
