@@ -116,12 +116,14 @@ def sensitivity_matrix(
 
 
 def _widened(problem, widen: tuple[float, float]):
-    """The same problem with bounds [lo, hi] x initial for every parameter (not 0 initially)."""
+    """The same problem with bounds widened to include [lo, hi] x initial for every parameter
+    (not 0 initially); the problem's own bounds stay inside, so any point of the box is valid."""
     from framework.problem import UpdatingProblem
 
     lo, hi = widen
     if not 0 <= lo < 1 < hi:
         raise InputError(f"sensitivity: widen must be (lo, hi) with 0 <= lo < 1 < hi, got {widen!r}")
-    bounds = {p.name: tuple(sorted((lo * p.initial, hi * p.initial))) for p in problem.parameters if p.initial != 0}
+    bounds = {p.name: (min(lo * p.initial, hi * p.initial, p.lower), max(lo * p.initial, hi * p.initial, p.upper))
+              for p in problem.parameters if p.initial != 0}
     parameters = problem.parameters.with_bounds(bounds)
     return UpdatingProblem(problem.model, problem.measured, parameters, problem.spec, name=problem.name)

@@ -1,87 +1,144 @@
-"""Bridge study tables: summary of optimizer runs, initial-frequency table."""
+"""Bridge studies (SPEC 6): the summary of the updating runs, the initial models of four
+cable discretisations (run kind ``analysis``), and the consistency of the committed configs."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from framework.models import bridge, bridge_study
+from framework.analysis import updating_summary
+from framework.models import bridge
+from framework.study.config import load, validate
+from framework.study.runner import run_study
 
+ROOT = Path(__file__).resolve().parents[1]
 NAMES = list(bridge.PARAMETER_NAMES)
 
 
-def _fake_runner_tables(root):
+def _fake_runner_tables():
     runs, params, modes, extra = [], [], [], []
     ratios = {
         "sm_1.00": [1.0, 1.1, 0.8, 0.76, 1.19, 1.3],
         "sm_0.92": [1.0, 1.1, 0.8, 0.77, 1.19, 1.3],
         "pso": [1.0, 1.1, 0.8, 0.76, 1.2, 1.29],
+        "snt": [0.95, 1.05, 0.85, 0.7, 1.25, 1.0],
     }
     for k, (label, r) in enumerate(ratios.items()):
         run_id = f"r{k}"
-        runs.append(
-            {
-                "run_id": run_id,
-                "label": label,
-                "seed": 0,
-                "objective": 0.0023 + k * 1e-5,
-                "n_evaluations": 70,
-                "condition_number": 6.9,
-                "status": "converged",
-            }
-        )
-        for name, value in zip(NAMES, r):
-            params.append({"run_id": run_id, "label": label, "seed": 0, "parameter": name, "ratio": value})
+        runs.append({"run_id": run_id, "label": label, "algorithm": label.split("_")[0], "seed": 0,
+                     "objective": 0.0023 + k * 1e-5, "n_evaluations": 70, "condition_number": 6.9,
+                     "status": "converged"})
+        for name, value in sorted(zip(NAMES, r)):  # the store sorts the rows by parameter name
+            params.append({"run_id": run_id, "label": label, "algorithm": label.split("_")[0], "seed": 0,
+                           "parameter": name, "initial": 1.0, "lower": 0.6, "upper": 1.3, "value": value,
+                           "ratio": value, "normalized": (value - 0.6) / 0.7})
         for j in range(8):
-            modes.append(
-                {"run_id": run_id, "label": label, "case": "base", "mode": j + 1, "error_pct": 1.0, "mac": 0.999}
-            )
+            modes.append({"run_id": run_id, "label": label, "algorithm": label.split("_")[0], "case": "base",
+                          "mode": j + 1, "error_pct": 1.0 + k, "mac": 0.999})
+    best = ratios["snt"]
     minima = [
-        {
-            "minimum": 1,
-            "theta": [1.0] * 6,
-            "raw_objective": 0.0023,
-            "derated_objective": 0.0023,
-            "artefact": False,
-            "distance_to_previous": [],
-            "n_evaluations": 900,
-        },
-        {
-            "minimum": 2,
-            "theta": [0.9] * 6,
-            "raw_objective": 0.01,
-            "derated_objective": 0.02,
-            "artefact": True,
-            "distance_to_previous": [0.5],
-            "n_evaluations": 800,
-        },
+        {"minimum": 1, "x": [(v - 0.6) / 0.7 for v in best], "theta": best, "raw_objective": 0.0023,
+         "derated_objective": 0.0023, "artefact": False, "distance_to_previous": [], "n_evaluations": 900},
+        {"minimum": 2, "x": [0.4] * 6, "theta": [0.88] * 6, "raw_objective": 0.01, "derated_objective": 0.02,
+         "artefact": True, "distance_to_previous": [0.5], "n_evaluations": 800},
     ]
-    extra.append({"run_id": "r9", "key": "minima", "value": json.dumps(minima)})
-    extra.append({"run_id": "r9", "key": "niche_radius", "value": json.dumps(0.5)})
-    for name, rows in (("runs", runs), ("parameters", params), ("modes", modes), ("extra", extra)):
-        pd.DataFrame(rows).to_csv(root / f"{name}.csv", index=False)
+    extra.append({"run_id": "r3", "label": "snt", "key": "minima", "value": json.dumps(minima)})
+    extra.append({"run_id": "r3", "label": "snt", "key": "niche_radius", "value": json.dumps(0.5)})
+    return {name: pd.DataFrame(rows) for name, rows in
+            (("runs", runs), ("parameters", params), ("modes", modes), ("extra", extra))}
 
 
-def test_summarize_updating_reports_sm_spread_and_snt_minima(tmp_path):
-    runs_dir = tmp_path / "updating"
-    runs_dir.mkdir()
-    _fake_runner_tables(runs_dir)
-    out = bridge_study.summarize_updating(runs_dir, tmp_path)
-    assert out["sm"]["max_ratio_distance_between_starts"].iloc[0] == pytest.approx(0.01)
-    snt = out["snt"]
+def test_updating_summary_reports_sm_spread_and_snt_minima(tmp_path):
+    tables = _fake_runner_tables()
+    out = updating_summary.tables(tables, starts="sm", spread="pso")
+    assert out["sm_starts"]["label"].tolist() == ["sm_0.92", "sm_1.00"]
+    assert out["sm_starts"]["max_ratio_distance_between_starts"].iloc[0] == pytest.approx(0.01)
+    spread = out["pso_spread"].set_index("quantity")
+    assert spread.loc["K_cable", "count"] == 1 and spread.loc["T_Cab1", "mean"] == pytest.approx(1.2)
+    snt = out["snt_minima"]
     assert list(snt["minimum"]) == [1, 2]
     assert snt["artefact_of_niche_radius"].tolist() == [False, True]
     assert snt["on_niche_boundary"].tolist() == [False, True]
-    assert snt["K_y_deck"].iloc[1] == pytest.approx(0.9)
-    assert (tmp_path / "snt_minima.csv").exists() and (tmp_path / "updated_ratios.png").exists()
-    assert out["best_modes"]["run_id"].unique().tolist() == ["r0"]
+    # the minima's vectors are in the problem's order, recovered although the table is sorted
+    assert snt["K_y_deck"].tolist() == pytest.approx([0.95, 0.88]) and snt["K_cable"].iloc[0] == pytest.approx(0.7)
+    assert out["updated_modes_best_run"]["run_id"].unique().tolist() == ["r0"]
+    written = updating_summary.figures({**tables, **out}, tmp_path)
+    assert [p.name for p in written] == ["updated_ratios.png", "updated_errors.png"]
+    assert all(p.stat().st_size > 10_000 for p in written)
 
 
-def test_initial_frequency_table_shows_lost_mode_for_one_element(tmp_path):
-    df = bridge_study.initial_frequencies(tmp_path, cable_elements=(1, 4))
-    four = df[df.cable_elements == 4]
-    assert np.all(np.abs(four.error_pct) < 11.0)
-    one = df[(df.cable_elements == 1) & (df["mode"] == 2)]
-    assert one.f_model_hz.iloc[0] > 2.5  # nearest vertical mode is the 2.78 Hz pylon mode
-    assert (tmp_path / "initial_frequencies.png").exists()
+def test_minima_order_can_be_given_when_the_best_point_is_ambiguous():
+    tables = _fake_runner_tables()
+    minima = json.loads(tables["extra"]["value"].iloc[0])
+    minima[0]["x"] = [0.5] * 6  # matches no parameter of the run's best point
+    tables["extra"].loc[0, "value"] = json.dumps(minima)
+    with pytest.raises(ValueError, match="parameter_order"):
+        updating_summary.tables(tables)
+    out = updating_summary.tables(tables, parameter_order=NAMES)
+    assert out["snt_minima"]["K_y_deck"].iloc[0] == pytest.approx(0.95)
+
+
+def test_initial_models_show_the_mode_lost_by_one_element_cables(tmp_path):
+    """Run kind ``analysis`` on the bridge: 1- and 4-element cables at the initial point."""
+    cfg = load(ROOT / "studies" / "bridge_analysis.yaml")
+    data = cfg.model_dump(mode="json")
+    data.update(output=str(tmp_path / "bridge"), sensitivity=None, report={},
+                variants={"cables_1": {"structure.options.cable_elements": 1, "points": {"initial": {}}},
+                          "cables_4": {"points": {"initial": {}}}})
+    data["execution"]["progress"] = False
+    run_study(validate(data), figures=False)
+    modes = pd.read_csv(tmp_path / "bridge" / "modes.csv")
+    assert set(modes["cable_elements"]) == {1, 4}  # a structure option is a typed column
+    peak = modes[(modes["case"] == "peak") & (modes["pairing"] == "type") & (modes["cable_elements"] == 4)]
+    np.testing.assert_allclose(peak["f_measured_hz"], bridge.MEASURED_PEAK_HZ)
+    modes = modes[modes["case"] == "base"]
+    by_type = modes[modes["pairing"] == "type"].set_index(["cable_elements", "mode"])
+    four = by_type.loc[4]
+    assert np.all(np.abs(four["error_pct"]) < 11.0)
+    assert (four["mode_type"] == four["measured_type"]).all()
+    assert four.loc[2, "cable_energy"] > four.loc[3, "cable_energy"]  # the cable-coupled 2nd vertical mode
+    np.testing.assert_allclose(four["design_model_hz"], bridge.DESIGN_MODEL_HZ)
+    assert by_type.loc[(1, 2), "f_model_hz"] > 2.5  # nearest vertical mode is the 2.78 Hz pylon mode
+    by_mac = modes[modes["pairing"] == "objective"].set_index(["cable_elements", "mode"])
+    assert not by_mac.loc[(1, 1), "matched"] and by_mac.loc[4, "matched"].all()
+
+
+def test_committed_updated_point_is_the_sm_result_of_the_cable_study():
+    """studies/bridge_analysis.yaml's updated point = SM of studies/bridge_cables.yaml (4 elements)."""
+    cfg = load(ROOT / "studies" / "bridge_analysis.yaml")
+    ratios = cfg.points["updated"].ratios
+    params = pd.read_csv(ROOT / "results" / "bridge" / "cables" / "parameters.csv")
+    sm4 = params[params["cable_elements"] == 4].set_index("parameter")["ratio"]
+    for name in NAMES:
+        assert ratios[name] == pytest.approx(sm4[name], rel=1e-12), name
+
+
+def test_bridge_analysis_gives_the_same_tables_on_dask_and_after_resume(tmp_path):
+    """The ported study (kind analysis, OpenSees fast path): serial = Dask = resumed."""
+    distributed = pytest.importorskip("distributed")
+    data = load(ROOT / "studies" / "bridge_analysis.yaml").model_dump(mode="json")
+    data.update(variants={}, validation=[], pairings=["objective"], report={})
+    data["execution"]["progress"] = False
+    names = ("points", "modes", "sensitivity", "identifiability", "parameter_correlation")
+
+    def tables(name, **execution):
+        cfg = validate({**data, "output": str(tmp_path / name), "execution": {**data["execution"], **execution}})
+        run_study(cfg, figures=False)
+        return {t: pd.read_csv(tmp_path / name / f"{t}.csv").drop(columns="wall_s", errors="ignore") for t in names}
+
+    serial = tables("serial")
+    assert len(serial["points"]) == 2 and len(serial["sensitivity"]) == 2 * 6 * 8
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    try:
+        dask = tables("dask", backend="dask", scheduler=cluster.scheduler_address)
+    finally:
+        cluster.close()
+    next((tmp_path / "serial" / "_runs").glob("*.json")).unlink()
+    cfg = validate({**data, "output": str(tmp_path / "serial")})
+    run_study(cfg, resume=True, figures=False)
+    resumed = {t: pd.read_csv(tmp_path / "serial" / f"{t}.csv").drop(columns="wall_s", errors="ignore") for t in names}
+    for name in names:
+        pd.testing.assert_frame_equal(serial[name], dask[name], check_exact=True)
+        pd.testing.assert_frame_equal(serial[name], resumed[name], check_exact=True)

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import pickle
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 pytest.importorskip("openseespy")
@@ -179,27 +181,59 @@ def test_only_global_modes_are_paired_with_the_three_measured_dofs():
     assert table["matched"].all()
 
 
-@pytest.mark.slow
-def test_study_script_writes_tidy_tables_and_meets_acceptance(tmp_path):
-    """studies/lab_frame_detailed.py with one run per algorithm (~15 s)."""
-    import importlib.util
-    from pathlib import Path
+ROOT = Path(__file__).resolve().parents[1]
 
-    import pandas as pd
 
-    path = Path(__file__).resolve().parents[1] / "studies" / "lab_frame_detailed.py"
-    spec = importlib.util.spec_from_file_location("lab_frame_detailed_study", path)
-    study = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(study)
-    assert study.main(["--runs", "1", "--output", str(tmp_path)]) == 0
-    for name in ("runs", "parameters", "modes", "history", "sensitivity", "comparison", "inset_scan"):
-        assert (tmp_path / f"{name}.csv").stat().st_size > 0
-    assert (tmp_path / "sensitivity.png").exists() and (tmp_path / "README.md").exists()
-    modes = pd.read_csv(tmp_path / "modes.csv")
-    det = modes[(modes["structure"] == "lab_frame_detailed") & (modes["algorithm"] != "initial")]
+def _study(name, tmp_path, **changes):
+    """A committed study config with changes, run into tmp_path; its tables."""
+    from framework.study.config import load, validate
+    from framework.study.runner import run_study
+
+    data = load(ROOT / "studies" / f"{name}.yaml").model_dump(mode="json")
+    data.update(output=str(tmp_path / name), **changes)
+    data["execution"]["progress"] = False
+    tables = run_study(validate(data), figures=False)
+    return {k: v for k, v in tables.items()} | {
+        p.stem: pd.read_csv(p) for p in (tmp_path / name).glob("*.csv") if p.stem not in tables}
+
+
+def test_sensitivity_study_finds_only_the_bending_brackets_sensitive(tmp_path):
+    """studies/lab_frame_detailed_sensitivity.yaml (run kind analysis), initial detailed model."""
+    t = _study("lab_frame_detailed_sensitivity", tmp_path, variants={}, points={"initial": {}},
+               report={"sensitivity": {}})
+    sens = t["sensitivity"].set_index(["parameter", "mode"])["rel_sensitivity_frequency"]
+    assert sens[("k_r2", 1)] > 0.3 and sens[("k_r3", 2)] > 0.03 and abs(sens[("k_u1", 1)]) < 1e-3
+    summary = t["sensitivity_summary"].set_index("parameter")
+    assert set(summary.index[summary["rank"] <= 2]) == {"k_r2", "k_r3"}
+    modes = t["modes"]
+    base = modes[modes["case"] == "base"].sort_values("mode")
+    np.testing.assert_allclose(base["f_model_hz"], [3.7206, 8.2192, 10.5077], rtol=2e-3)
+    assert set(modes["case"]) == {"base", "mass_0.654kg", "mass_1.379kg"}
+    assert t["points"]["condition_number"].iloc[0] > 1e6  # six stiffnesses, three frequencies and MACs
+
+
+def test_committed_updated_point_is_the_best_detailed_run():
+    """The sensitivity study's updated point = the best detailed run of studies/lab_frame_detailed.yaml."""
+    from framework.study.config import load
+
+    point = load(ROOT / "studies" / "lab_frame_detailed_sensitivity.yaml").points["updated"].values
+    best = pd.read_csv(ROOT / "results" / "lab_frame_detailed" / "updating" / "comparison_runs.csv")
+    best = best[best["variant"] == "detailed"].iloc[0]
+    assert point == {"k_r2": pytest.approx(best["k_r2"], rel=1e-12), "k_r3": pytest.approx(best["k_r3"], rel=1e-12)}
+
+
+def test_updating_study_meets_acceptance_and_compares_with_the_3dof_model(tmp_path):
+    """studies/lab_frame_detailed.yaml with one run per algorithm (~10 s)."""
+    t = _study("lab_frame_detailed", tmp_path, runs=1,
+               report={"comparison": {"by": "variant"}})
+    modes = t["modes"]
+    det = modes[modes["variant"] == "detailed"]
     assert set(det["case"]) == {"base", "mass_0.654kg", "mass_1.379kg"}
     assert det[det["case"] == "base"]["error_pct"].abs().max() < 1.0
     assert det["error_pct"].abs().max() < 2.5
-    sens = pd.read_csv(tmp_path / "sensitivity.csv")
-    top = sens[sens["point"] == "initial"].set_index(["parameter", "mode"])["rel_sensitivity_frequency"]
-    assert top[("k_r2", 1)] > 0.3 and top[("k_r3", 2)] > 0.03 and abs(top[("k_u1", 1)]) < 1e-3
+    summary = t["comparison_summary"].set_index(["model", "case"])
+    assert set(summary.index.get_level_values("model")) == {"detailed", "3dof"}
+    assert summary.loc[("detailed", "mass_1.379kg"), "max_abs_error_pct"] < summary.loc[
+        ("3dof", "mass_1.379kg"), "max_abs_error_pct"]
+    runs = t["comparison_runs"].set_index("model")
+    assert 650 < runs.loc["detailed", "k_r2"] < 800 and np.isnan(runs.loc["3dof", "k_r2"])

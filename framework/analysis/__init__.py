@@ -30,6 +30,10 @@ ANALYSES: dict[str, str] = {
     "selection": "framework.analysis.selection",
     "minima": "framework.analysis.minima",
     "truth": "framework.analysis.truth",
+    "comparison": "framework.analysis.comparison",
+    "sensitivity": "framework.analysis.sensitivity",
+    "modes": "framework.analysis.modes",
+    "updating_summary": "framework.analysis.updating_summary",
 }
 
 

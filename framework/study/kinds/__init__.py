@@ -34,6 +34,7 @@ from framework.errors import InputError
 KINDS: dict[str, str] = {
     "updating": "framework.study.kinds.updating",
     "identification": "framework.study.kinds.identification",
+    "analysis": "framework.study.kinds.analysis",
 }
 
 
