@@ -33,6 +33,7 @@ from framework.errors import InputError
 
 KINDS: dict[str, str] = {
     "updating": "framework.study.kinds.updating",
+    "diagnose": "framework.study.kinds.diagnose",
 }
 
 
