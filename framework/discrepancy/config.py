@@ -15,9 +15,9 @@ with ``runs: 10`` diagnoses ten independent data sets. The schema of the whole c
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
-from pydantic import Field, StrictInt, model_validator
+from pydantic import Discriminator, Field, StrictInt, Tag, model_validator
 
 from framework.discrepancy.effects import Catalogue
 from framework.discrepancy.generate import NOISE_LEVELS, HiddenCase, Noise, generate
@@ -35,6 +35,13 @@ class NoiseConfig(Strict):
     shape_std_rel: float = Field(gt=0, le=1)
 
 
+#: a noise level's name, or the two standard deviations (errors name only the form given)
+NoiseSpec = Annotated[
+    Annotated[NoiseLevel, Tag("level")] | Annotated[NoiseConfig, Tag("std")],
+    Discriminator(lambda v: "std" if isinstance(v, dict | NoiseConfig) else "level"),
+]
+
+
 class GenerateConfig(Strict):
     """Simulated data: hidden effects ({effect: variant, or null for a random variant}),
     optional true values of their parameters, seed (default: the run's seed), noise level,
@@ -45,7 +52,7 @@ class GenerateConfig(Strict):
     hidden: dict[str, str | None] = Field(default_factory=dict)
     values: dict[str, float] = Field(default_factory=dict)
     seed: StrictInt | None = Field(None, ge=0, le=2**32 - 1)
-    noise: NoiseLevel | NoiseConfig = "low"
+    noise: NoiseSpec = "low"
     magnitude: float = Field(1.0, gt=0, le=10)
     parameter_error_rel: float = Field(0.05, ge=0, le=1)
 
