@@ -28,6 +28,10 @@ Report options (``report:``; they never change a run): ``outcomes: true`` derive
 ``cases`` and ``rates`` tables (:mod:`framework.discrepancy.outcomes`) and ``study.png``;
 ``showcase_seeds: [1]`` draws ``showcase/<case>.png`` for every run of those seeds. A study of
 one run draws ``discrepancy.png``.
+
+Runs execute serially, on processes or on Dask (``execution.backend``); a diagnosis's
+own calibrations evaluate the model in the run's process (``execution.evaluation_backend``
+and ``isolate`` do not apply to this kind).
 """
 
 from __future__ import annotations
