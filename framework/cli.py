@@ -63,9 +63,9 @@ def _cmd_validate(args) -> int:
 
 
 def _cmd_diagnose(args) -> int:
-    from framework.discrepancy.workflow import diagnose_config
+    from framework.study.kinds.diagnose import diagnose_command
 
-    return diagnose_config(args.config, overrides=args.set, output=args.output)
+    return diagnose_command(args.config, overrides=args.set, output=args.output)
 
 
 def _cmd_bench(args) -> int:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pandas as pd
 import pytest
 
 from framework.discrepancy import likelihood
@@ -13,6 +12,7 @@ from framework.discrepancy.beam_effects import catalogue as beam_catalogue
 from framework.discrepancy.calibrate import calibrate
 from framework.discrepancy.generate import NOISE_LEVELS, HiddenCase, Noise, generate
 from framework.discrepancy.score import bic, rank
+from framework.discrepancy.tables import diagnosis_tables
 from framework.discrepancy.workflow import DiagnoseSettings, diagnose
 from framework.errors import InputError
 from framework.measurements import MeasuredModes
@@ -146,9 +146,16 @@ def test_beam_hidden_effect_is_named_and_gap_shrinks(effect, seed):
     s = d.summary()
     assert s["p_before"] < 1e-6 and s["p_after"] > 0.01
     assert s["max_freq_error_pct_after"] < s["max_freq_error_pct_before"] / 3
-    tables = d.tables()
+    tables = diagnosis_tables(d)
     assert set(tables["modes"]["stage"]) == {"before", "after"}
     assert tables["candidates"].query("named")["effect"].tolist() == [effect]
+    # every candidate's fitted parameters are reported, the named one's value next to its truth
+    params = tables["parameters"]
+    assert set(params.query("round == 1")["candidate"]) == {"none", *cat.effects}
+    named = params.query("round == 1 and named and effect == @effect").iloc[0]
+    truth = m.meta["truth_parameters"][named["parameter"]]
+    assert named["truth"] == truth and named["value"] == pytest.approx(truth, rel=0.3)
+    assert params.query("final")["model"].nunique() == 1
 
 
 def test_lab_frame_semi_rigid_joints_named_and_null_case():
@@ -168,37 +175,6 @@ def test_lab_frame_semi_rigid_joints_named_and_null_case():
     assert d0.named_effects == [] and not d0.rounds[0].detection.significant
 
 
-def test_diagnose_config_writes_tables(tmp_path):
-    from framework.discrepancy.workflow import diagnose_config
-
-    cfg = tmp_path / "c.yaml"
-    cfg.write_text(
-        "name: t\nstructure: beam\nmeasured:\n  generate: {hidden: {midspan_mass: null}, seed: 2, noise: high}\n"
-        "settings: {n_starts: 1, max_evaluations: 150}\n"
-    )
-    assert diagnose_config(str(cfg), [], str(tmp_path / "out")) == 0
-    summary = pd.read_csv(tmp_path / "out" / "summary.csv")
-    assert summary.loc[0, "named_effect"] == "midspan_mass"
-    assert (tmp_path / "out" / "discrepancy.png").stat().st_size > 10_000
-    modes = pd.read_parquet(tmp_path / "out" / "modes.parquet")
-    assert len(modes) == 10 and set(modes.columns) >= {"f_measured_hz", "f_model_hz", "error_pct", "mac", "matched"}
-
-
-def test_config_errors_name_field_and_value(tmp_path):
-    from framework.discrepancy.config import load
-
-    cfg = tmp_path / "c.yaml"
-    cfg.write_text("name: t\nstructure: beam\nmeasured: {builtin: beam, file: x.yaml}\n")
-    with pytest.raises(InputError, match="exactly one of file, builtin, generate"):
-        load(cfg)
-    cfg.write_text("name: t\nstructure: beam\nmeasured: {builtin: beam}\nsettings: {alpha: 2}\n")
-    with pytest.raises(InputError, match=r"settings.alpha.*2"):
-        load(cfg)
-    cfg.write_text("name: t\nstructure: beam\nmeasured: {file: missing.yaml}\n")
-    with pytest.raises(InputError, match="measured.file: file not found: missing.yaml"):
-        load(cfg)
-
-
 def test_holdout_modes_scores_candidates_by_prediction():
     cat = beam_catalogue()
     m = generate(cat, HiddenCase({"localized_stiffness_loss": None}, seed=3, noise=NOISE_LEVELS["high"]))
@@ -207,20 +183,3 @@ def test_holdout_modes_scores_candidates_by_prediction():
     assert d.named_effects == ["localized_stiffness_loss"]
     assert table.loc["localized_stiffness_loss", "loo_chi2"] < table.loc["none", "loo_chi2"] / 2
     assert table.loc["localized_stiffness_loss", "delta_loo_vs_none"] > 0
-
-
-def test_study_rows_and_rates(tmp_path):
-    from framework.discrepancy import study
-
-    specs = study.plan(["beam"], ["high"], [1], hidden={"beam": [(), ("midspan_mass",)]})
-    assert [s["id"] for s in specs] == ["beam__none__high__seed1", "beam__midspan_mass__high__seed1"]
-    cases = study.run(specs, tmp_path)
-    assert cases["named_effect"].tolist() == ["midspan_mass", "none"]  # sorted by hidden effect
-    rates = pd.read_csv(tmp_path / "rates.csv").set_index("hidden_effect")
-    assert rates.loc["midspan_mass", "correct_rate"] == 1.0
-    assert rates.loc["none", "false_discovery_rate"] == 0.0
-    assert (tmp_path / "study.png").exists()
-    again = study.run(specs, tmp_path)  # resume: nothing re-run
-    assert again["wall_s"].tolist() == cases["wall_s"].tolist()
-    bad = study.run_case({"id": "x", "structure": "nope", "hidden": [], "noise": "low", "seed": 1})
-    assert "no effect catalogue" in bad["error"]

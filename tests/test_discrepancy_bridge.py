@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
+import yaml
 
 from framework.discrepancy.bridge_effects import catalogue
 from framework.discrepancy.generate import NOISE_LEVELS, HiddenCase, generate
-from framework.discrepancy.study import SETTINGS
-from framework.discrepancy.workflow import diagnose
+from framework.discrepancy.workflow import DiagnoseSettings, diagnose
+
+#: the bridge's settings of the hidden-effect study (budgets sized for a shared 2-core machine)
+SETTINGS = DiagnoseSettings(
+    **yaml.safe_load((Path(__file__).parents[1] / "studies" / "discrepancy.yaml").read_text())["variants"][
+        "bridge__none"]["settings"]
+)
 
 
 def test_cable_chains_hidden_single_element_model_loses_the_cable_coupled_mode():
@@ -16,7 +24,7 @@ def test_cable_chains_hidden_single_element_model_loses_the_cable_coupled_mode()
     vertical mode is unmatched, local cable vibration is named, then every mode matches."""
     cat = catalogue()
     m = generate(cat, HiddenCase({"local_cable_vibration": None}, seed=1, noise=NOISE_LEVELS["low"]))
-    d = diagnose(cat, m, SETTINGS["bridge"])
+    d = diagnose(cat, m, SETTINGS)
     before = d.rounds[0]
     unmatched = np.flatnonzero(~before.fit.correlation.matched)
     assert len(unmatched) == 1
@@ -38,9 +46,9 @@ def test_cable_chains_hidden_single_element_model_loses_the_cable_coupled_mode()
 def test_bridge_bearing_flexibility_named_and_null_case_clean():
     cat = catalogue()
     m = generate(cat, HiddenCase({"bearing_flexibility": None}, seed=1, noise=NOISE_LEVELS["low"]))
-    d = diagnose(cat, m, SETTINGS["bridge"])
+    d = diagnose(cat, m, SETTINGS)
     assert d.named_effects == ["bearing_flexibility"]
     k = dict(zip(d.after.parameters.names, d.after.theta))["K_bearing"]
     assert k == pytest.approx(m.meta["truth_parameters"]["K_bearing"], rel=0.05)
-    null = diagnose(cat, generate(cat, HiddenCase({}, seed=2, noise=NOISE_LEVELS["high"])), SETTINGS["bridge"])
+    null = diagnose(cat, generate(cat, HiddenCase({}, seed=2, noise=NOISE_LEVELS["high"])), SETTINGS)
     assert null.named_effects == [] and not null.rounds[0].detection.significant

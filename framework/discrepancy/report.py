@@ -1,10 +1,12 @@
-"""Write a diagnosis: tidy tables (CSV + Parquet, atomic) and the before/after figure.
+"""Figures of diagnoses, drawn from their tables only (:mod:`framework.discrepancy.tables`).
 
-Files under the output folder: ``modes`` (per measured mode, before and after:
-frequency, error, MAC, matched, z), ``candidates`` (ranking with BIC per round),
-``parameters`` (fitted base and effect parameters), ``detection`` (chi-square test per
-round), ``comac`` (per sensor and round), ``summary`` (one row), and ``discrepancy.png``
-drawn from the tables only.
+- :func:`case_figure` (``discrepancy.png``): one diagnosis: frequency error and MAC per
+  mode before/after, the candidates' Delta BIC per round, COMAC per sensor and round;
+- :func:`study_figure` (``study.png``): many diagnoses of data with hidden effects: the gap
+  before against after per case, coloured by outcome (the ``cases`` table of
+  :mod:`framework.discrepancy.outcomes`);
+- :func:`write`: a diagnosis's tables (CSV + Parquet, atomic) and its figure, for the
+  Python API (studies write through the engine's store instead).
 """
 
 from __future__ import annotations
@@ -19,25 +21,27 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from framework.discrepancy.tables import diagnosis_tables  # noqa: E402
 from framework.io import save_figure  # noqa: E402
-from framework.study.store import write_table  # noqa: E402
+from framework.tables import write_table  # noqa: E402
 
 log = logging.getLogger(__name__)
 
 
 def write(diagnosis, output: str | Path, figure: bool = True) -> dict[str, pd.DataFrame]:
-    """Write every table of ``diagnosis`` (and the figure) under ``output``."""
+    """Write every table of ``diagnosis`` (and ``discrepancy.png``) under ``output``."""
     out = Path(output)
-    tables = diagnosis.tables()
+    tables = diagnosis_tables(diagnosis)
     for name, df in tables.items():
         write_table(df, out / name)
     if figure:
-        plot(tables, out / "discrepancy.png")
+        case_figure(tables, out / "discrepancy.png")
     return tables
 
 
-def plot(tables: dict[str, pd.DataFrame], path: Path) -> None:
-    """Four panels: frequency error and MAC per mode before/after, candidate Delta BIC, COMAC."""
+def case_figure(tables: dict[str, pd.DataFrame], path: Path) -> None:
+    """Four panels: frequency error and MAC per mode before/after, candidate Delta BIC, COMAC
+    (the tables of one diagnosis)."""
     modes = tables["modes"]
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
     colors = {"before": "tab:red", "after": "tab:blue"}
@@ -66,10 +70,11 @@ def plot(tables: dict[str, pd.DataFrame], path: Path) -> None:
     if len(cands):
         c = cands.copy()
         c["name"] = (
-            "round " + c["round"].astype(str) + ": " + c["effect"] + c["variant"].map(lambda v: f" [{v}]" if v else "")
+            "round " + c["round"].astype(str) + ": " + c["effect"]
+            + c["effect_variant"].fillna("").map(lambda v: f" [{v}]" if v else "")
         )
         gain = np.sign(c["delta_bic_vs_none"]) * np.log10(1 + np.abs(c["delta_bic_vs_none"]))
-        ax.barh(c["name"], gain, color=np.where(c["named"], "tab:green", "0.6"))
+        ax.barh(c["name"], gain, color=np.where(c["named"].astype(bool), "tab:green", "0.6"))
         ax.axvline(np.log10(11), color="k", ls="--", lw=0.8)
         ax.set(xlabel="sign * log10(1 + |Delta BIC vs no change|)", title="candidates (green: named; dashed: decisive)")
         ax.tick_params(axis="y", labelsize=7)
@@ -85,4 +90,41 @@ def plot(tables: dict[str, pd.DataFrame], path: Path) -> None:
         ax.legend(fontsize=7)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
+    save_figure(fig, path, dpi=110, tight=False)
+
+
+OUTCOME_COLORS = {
+    "correct": "tab:green",
+    "wrong": "tab:red",
+    "false discovery": "tab:purple",
+    "missed": "tab:orange",
+    "none (null case)": "0.5",
+    "partial (subset named)": "tab:olive",
+}
+
+
+def study_figure(cases: pd.DataFrame, path: Path) -> None:
+    """Gap before/after per case (max frequency error, log scale), coloured by naming outcome;
+    one panel per structure (the ``cases`` table)."""
+    ok = cases[cases["status"] == "completed"].copy()
+    ok["outcome"] = np.select(
+        [ok[c].astype(bool) for c in ("correct", "wrong", "false_discovery", "missed", "partial")],
+        ["correct", "wrong", "false discovery", "missed", "partial (subset named)"],
+        "none (null case)",
+    )
+    structures = sorted(ok["structure"].unique())
+    n = max(len(structures), 1)
+    fig, axes = plt.subplots(1, n, figsize=(5.5 * n, 4.5), squeeze=False)
+    gaps = ["max_freq_error_pct_before", "max_freq_error_pct_after"]
+    for ax, structure in zip(axes[0], structures):
+        d = ok[ok["structure"] == structure]
+        for outcome, dd in d.groupby("outcome"):
+            ax.scatter(dd[gaps[0]], dd[gaps[1]], s=18, color=OUTCOME_COLORS[outcome], label=f"{outcome} ({len(dd)})",
+                       alpha=0.8)  # fmt: skip
+        values = d[gaps].to_numpy(dtype=float)
+        lim = [max(1e-3, float(np.nanmin(values)) / 2), float(np.nanmax(values)) * 2]
+        ax.plot(lim, lim, "k--", lw=0.7)
+        ax.set(xscale="log", yscale="log", xlabel="max |freq error| before (%)", ylabel="after (%)", title=structure)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
     save_figure(fig, path, dpi=110, tight=False)

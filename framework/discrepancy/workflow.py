@@ -12,21 +12,22 @@
 3. Add: the named effect joins the model (re-calibrated from extra random starts);
    repeat from 1 until nothing significant remains, no candidate is decisive, or
    ``max_rounds`` effects were added.
-4. Show: :meth:`Diagnosis.tables` (modes before/after, candidates, parameters,
-   detection, COMAC) and :func:`framework.discrepancy.report.write` (CSV/Parquet + figure).
+4. Show: :func:`framework.discrepancy.tables.diagnosis_tables` (rounds, candidates, modes
+   before/after, parameters of every fitted model, COMAC, summary) and
+   :mod:`framework.discrepancy.report` (figures drawn from those tables).
 
-Python API: ``diagnose(catalogue, measured, settings)``; command line:
-``gomu diagnose CONFIG`` (:func:`diagnose_config`, schema in :mod:`.config`).
+Python API: ``diagnose(catalogue, measured, settings)``; command line: ``gomu diagnose
+CONFIG`` or ``gomu run CONFIG`` with a config of run kind ``diagnose``
+(:mod:`framework.study.kinds.diagnose`).
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
-import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field
 
 from framework.discrepancy import likelihood
@@ -35,7 +36,6 @@ from framework.discrepancy.detect import DEFAULT_ALPHA, Detection, detect
 from framework.discrepancy.effects import Catalogue
 from framework.discrepancy.score import DECISIVE_DELTA_BIC, NO_CHANGE, Ranking, rank
 from framework.measurements import MeasuredModes
-from framework.objectives import correlation_table
 from framework.parameters import Parameter, ParameterSet
 
 log = logging.getLogger(__name__)
@@ -58,7 +58,7 @@ class DiagnoseSettings(BaseModel):
     as a mass position give multimodal likelihoods).
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
     alpha: float = Field(DEFAULT_ALPHA, gt=0, lt=1)
     decisive_delta_bic: float = Field(DECISIVE_DELTA_BIC, ge=0)
@@ -75,7 +75,8 @@ class DiagnoseSettings(BaseModel):
     holdout_modes: bool = False
     refine_starts: int = Field(3, ge=0)
     screen_points: int = Field(16, ge=0)
-    seed: int = 0
+    #: seed of the calibrations' random starts and of the Sobol screening
+    seed: int = Field(0, ge=0)
 
 
 @dataclass
@@ -99,6 +100,8 @@ class Diagnosis:
     rounds: list[Round]
     conclusion: str
     catalogue: Catalogue
+    #: model evaluations of every calibration and screening (held-out-mode refits not counted)
+    n_evaluations: int = 0
 
     @property
     def before(self) -> Fit:
@@ -131,67 +134,6 @@ class Diagnosis:
         row |= {f"{k}_before": v for k, v in b.items()} | {f"{k}_after": v for k, v in a.items()}
         return row
 
-    def tables(self) -> dict[str, pd.DataFrame]:
-        """Tidy tables: modes, candidates, parameters, detection, comac, summary."""
-        modes = []
-        for stage, fit, det in (
-            ("before", self.before, self.rounds[0].detection),
-            ("after", self.after, self.rounds[-1].detection),
-        ):
-            table = correlation_table(fit.correlation, self.measured)
-            table.insert(0, "model", fit.label)
-            table.insert(0, "stage", stage)
-            modes.append(table.assign(z_frequency=det.modes["z_frequency"].to_numpy()))
-        cands = [r.ranking.table.assign(round=r.index + 1) for r in self.rounds if r.ranking is not None]
-        params = []
-        for stage, fit in (("before", self.before), ("after", self.after)):
-            owner = {p.name: "base" for p in self.catalogue.base_parameters}
-            for name, eff in self.catalogue.effects.items():
-                owner |= {p.name: name for p in eff.parameters}
-            for p, v in zip(fit.parameters, fit.theta):
-                ref = _reference(self.catalogue, p.name)
-                params.append(
-                    {
-                        "stage": stage,
-                        "parameter": p.name,
-                        "effect": owner.get(p.name, ""),
-                        "variant": fit.active.get(owner.get(p.name, ""), ""),
-                        "value": float(v),
-                        "null_or_initial": ref.initial,
-                        "lower": p.lower,
-                        "upper": p.upper,
-                        "unit": p.unit,
-                    }
-                )
-        detection = pd.DataFrame(
-            [
-                {"round": r.index + 1, "model": r.fit.label, **r.detection.summary(), "named": r.named or NO_CHANGE}
-                for r in self.rounds
-            ]
-        )
-        comac = pd.concat(
-            [r.detection.comac.assign(round=r.index + 1, model=r.fit.label) for r in self.rounds], ignore_index=True
-        )
-        return {
-            "modes": pd.concat(modes, ignore_index=True),
-            "candidates": pd.concat(cands, ignore_index=True) if cands else pd.DataFrame(),
-            "parameters": pd.DataFrame(params),
-            "detection": detection,
-            "comac": comac,
-            "summary": pd.DataFrame([self.summary()]),
-        }
-
-
-def _reference(catalogue: Catalogue, name: str) -> Parameter:
-    for p in catalogue.base_parameters:
-        if p.name == name:
-            return p
-    for eff in catalogue.effects.values():
-        for p in eff.parameters:
-            if p.name == name:
-                return p
-    raise KeyError(name)
-
 
 def _label(active: Mapping[str, str]) -> str:
     return "+".join(f"{k}[{v}]" if v else k for k, v in active.items()) or "model under test"
@@ -217,19 +159,24 @@ def fit_model(
     settings: DiagnoseSettings,
     warm: Fit | None = None,
 ) -> Fit:
-    """Calibrate the catalogue's model with ``active`` effects to ``measured``."""
+    """Calibrate the catalogue's model with ``active`` effects to ``measured``.
+
+    The fit's ``n_evaluations`` includes the screening points evaluated to pick its starts.
+    """
     model = catalogue.model(active)
     params = _warm_parameters(catalogue, active, warm)
     x0 = params.x_initial
     starts = [x0]
+    screened = 0
     new = [i for i, n in enumerate(params.names) if warm is not None and n not in warm.parameters.names]
     if new and settings.screen_points > 0:  # screen the new parameters, start from the best points
         starts += _screened_starts(model, measured, params, x0, new, settings)
+        screened = settings.screen_points
     elif new:  # second start: the new effect's parameters a third into their range
         x1 = x0.copy()
         x1[new] = np.where(x0[new] < 0.5, x0[new] + 1 / 3, x0[new] - 1 / 3)
         starts.append(x1)
-    return calibrate(
+    fit = calibrate(
         model,
         measured,
         parameters=catalogue.parameters(active),
@@ -241,6 +188,7 @@ def fit_model(
         label=_label(active),
         active=dict(active),
     )
+    return replace(fit, n_evaluations=fit.n_evaluations + screened)
 
 
 def _screened_starts(model, measured, params, x0, new, settings: DiagnoseSettings) -> list[np.ndarray]:
@@ -253,7 +201,7 @@ def _screened_starts(model, measured, params, x0, new, settings: DiagnoseSetting
     pts = qmc.Sobol(d=len(new), scramble=True, seed=settings.seed).random(n)
     X = np.tile(x0, (n, 1))
     X[:, new] = pts
-    obj = UpdatingProblem(model, measured, params, spec_of(settings)).objective(X)
+    obj = UpdatingProblem(model, measured, parameters=params, objective=spec_of(settings)).objective(X)
     order = np.argsort(obj)
     return [X[i] for i in order[: max(1, settings.n_starts - 1)]]
 
@@ -281,6 +229,7 @@ def diagnose(
     spec = spec_of(settings)
     active = catalogue.check_active(start or {})
     fit = fit_model(catalogue, active, data, settings)
+    spent = fit.n_evaluations
     rounds: list[Round] = []
     conclusion = ""
     for r in range(settings.max_rounds + 1):
@@ -300,6 +249,7 @@ def diagnose(
             best = None
             for variant in eff.variants:
                 f = fit_model(catalogue, {**active, name: variant}, data, settings, warm=fit)
+                spent += f.n_evaluations
                 if best is None or f.chi2 < best.chi2:
                     best = f
             candidates[name] = (best, len(eff.variants))
@@ -321,14 +271,16 @@ def diagnose(
         fit = candidates[rnd.named][0]
         active = dict(fit.active)
         if settings.refine_starts:
-            fit = _refine(catalogue, fit, data, settings)
-    return Diagnosis(catalogue.structure, data, rounds, conclusion, catalogue)
+            refined = _refine(catalogue, fit, data, settings)
+            spent += refined.n_evaluations
+            fit = refined if refined.chi2 < fit.chi2 else fit
+    return Diagnosis(catalogue.structure, data, rounds, conclusion, catalogue, n_evaluations=spent)
 
 
 def _refine(catalogue: Catalogue, fit: Fit, data: MeasuredModes, settings: DiagnoseSettings) -> Fit:
-    """Re-calibrate the enriched model from its estimate plus ``refine_starts`` random starts."""
+    """The enriched model re-calibrated from its estimate plus ``refine_starts`` random starts."""
     x0 = fit.parameters.to_normalized(fit.theta)
-    refined = calibrate(
+    return calibrate(
         catalogue.model(fit.active),
         data,
         parameters=catalogue.parameters(fit.active),
@@ -340,7 +292,6 @@ def _refine(catalogue: Catalogue, fit: Fit, data: MeasuredModes, settings: Diagn
         active=dict(fit.active),
         x_starts=[x0],
     )
-    return refined if refined.chi2 < fit.chi2 else fit
 
 
 def _holdout(rnd: Round, catalogue: Catalogue, data: MeasuredModes, spec, settings: DiagnoseSettings) -> None:
@@ -362,10 +313,3 @@ def _holdout(rnd: Round, catalogue: Catalogue, data: MeasuredModes, spec, settin
         )
         table["named"] = False
         table["decision"] = rnd.ranking.reason
-
-
-def diagnose_config(path: str, overrides: list[str] | None = None, output: str | None = None) -> int:
-    """``gomu diagnose CONFIG``: run the workflow from a config file; returns the exit code."""
-    from framework.discrepancy.config import run_config
-
-    return run_config(path, overrides or [], output)

@@ -9,9 +9,12 @@ Every kind is a module with:
   ``{"label", "seed", "task", "columns", "relevant"}``: ``task`` is everything the run needs
   (plain data, picklable; its hash is the run's identity), ``columns`` the settings shown as
   typed columns in every table, ``relevant`` the sweep keys that change this run (optional);
-- ``check(cfg, source)``: checks that need more than the schema (data files, model
-  parameters), raising InputError before any run starts; it must not import code named in the
-  config unless ``build=True`` is passed;
+- ``check(cfg, source, base_dir)``: checks that need more than the schema (data files),
+  raising InputError when the config is read; it imports no code named in the config;
+- ``preflight(specs, build_references=True)``: checks of every distinct input of the plan
+  (building models, reading data) before any run starts, raising InputError; with
+  ``build_references=False`` (``gomu validate`` without ``--build``) it imports no code named
+  in the config as ``module:function``;
 - ``run(spec) -> dict[table, list[row]]``: one run; a failure is data (a row with
   ``status`` "error" or "failed"), it never ends the study;
 - ``identity(task) -> dict`` (optional): the part of the task that determines the result,
@@ -35,6 +38,7 @@ KINDS: dict[str, str] = {
     "updating": "framework.study.kinds.updating",
     "identification": "framework.study.kinds.identification",
     "analysis": "framework.study.kinds.analysis",
+    "diagnose": "framework.study.kinds.diagnose",
 }
 
 

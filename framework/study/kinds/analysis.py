@@ -164,8 +164,13 @@ def identity(task: dict) -> dict:
 
 
 def preflight(specs: list[dict], build_references: bool = True) -> None:
-    """Build every run's problem and point before any run starts (InputError naming the study)."""
+    """Build every run's problem and point before any run starts (InputError naming the study);
+    with ``build_references=False`` a task that names code (``module:function``) is not built."""
+    from framework.study.kinds.updating import _names_code
+
     for spec in specs:
+        if not build_references and _names_code(spec["task"]):
+            continue
         try:
             problem = build_problem(spec["task"])
             point_theta(problem.parameters, spec["task"]["point"], spec["label"])

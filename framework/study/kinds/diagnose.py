@@ -1,0 +1,391 @@
+"""Run kind ``diagnose``: one run is one diagnosis of model-form discrepancy (SPEC 9).
+
+A run calibrates the model under test of a structure's effect catalogue to measured modes
+(a file, a built-in data set, or data generated with hidden effects), tests the residuals,
+names the missing effect, adds it and repeats (:func:`framework.discrepancy.workflow.diagnose`).
+Example (one diagnosis; ``gomu diagnose`` or ``gomu run``)::
+
+    study: lab_two_effects
+    kind: diagnose
+    structure: lab_frame              # a catalogue: beam, lab_frame, bridge, or module:function
+    measured:                         # exactly one of file / builtin / generate
+      generate: {hidden: {semi_rigid_joints: null, sensor_mass_eccentricity: null}, noise: high}
+    seed: 2                           # the data's seed when generate gives none
+    settings: {n_starts: 2, max_evaluations: 150}
+
+A study of many diagnoses sweeps the data (``variants``: structure and hidden effects;
+``sweep``: ``measured.generate.noise``, ``measured.generate.magnitude``; ``runs``: seeds);
+see ``studies/discrepancy.yaml``. A magnitude changes nothing when the hidden effects have
+no free parameter (or none at all): such runs are planned once, with magnitude 1.
+
+Tables (:mod:`framework.discrepancy.tables`): ``summary`` (one row per run, with ``status``
+"completed" or "failed", ``error``, ``wall_s``, ``n_evaluations``, and every workflow
+setting as a column), ``rounds``, ``candidates``, ``modes``, ``parameters``, ``comac``.
+Every table carries the columns ``structure`` and, for generated data, ``hidden_effect``,
+``magnitude`` and ``noise``.
+
+Report options (``report:``; they never change a run): ``outcomes: true`` derives the
+``cases`` and ``rates`` tables (:mod:`framework.discrepancy.outcomes`) and ``study.png``;
+``showcase_seeds: [1]`` draws ``showcase/<case>.png`` for every run of those seeds. A study of
+one run draws ``discrepancy.png``.
+
+Runs execute serially, on processes or on Dask (``execution.backend``); a diagnosis's
+own calibrations evaluate the model in the run's process (``execution.evaluation_backend``
+and ``isolate`` do not apply to this kind).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import logging
+import sys
+import time
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import (
+    Field,
+    StrictBool,
+    StrictInt,
+    ValidationError,
+    field_serializer,
+    field_validator,
+    model_validator,
+)
+
+from framework.discrepancy.config import MeasuredSource, data_seed, measured_of, noise_of, source_kind
+from framework.discrepancy.effects import Catalogue, get_catalogue
+from framework.discrepancy.score import NO_CHANGE
+from framework.discrepancy.tables import TABLES, diagnosis_rows
+from framework.discrepancy.workflow import DiagnoseSettings, diagnose
+from framework.errors import InputError, ModelEvaluationError
+from framework.study.schema import MAX_RUNS_PER_ENTRY, Strict, StudyHeader
+
+log = logging.getLogger(__name__)
+
+__all__ = ["TABLES", "Config", "analyses", "check", "diagnose_command", "figures", "identity", "plan_runs",
+           "preflight", "run"]  # fmt: skip
+
+#: where ``gomu diagnose`` writes a legacy config (``name:`` instead of ``study:``)
+LEGACY_ROOT = "results/discrepancy"
+
+
+# ---- schema ------------------------------------------------------------------------------
+class ReportConfig(Strict):
+    outcomes: StrictBool = False
+    showcase_seeds: list[StrictInt] = Field(default_factory=list)
+
+
+class Config(StudyHeader):
+    kind: Literal["diagnose"] = "diagnose"
+    runs: StrictInt = Field(1, ge=1, le=MAX_RUNS_PER_ENTRY)
+    structure: str = Field(min_length=1)
+    structure_options: dict[str, Any] = Field(default_factory=dict)
+    #: effects already in the model under test {name: variant ("" or null if it has none)}
+    start_effects: dict[str, str | None] = Field(default_factory=dict)
+    measured: MeasuredSource
+    #: workflow settings; those left out take the catalogue's recommendation, else the default
+    settings: DiagnoseSettings = Field(default_factory=DiagnoseSettings)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _legacy_name(cls, data):
+        """A ``gomu diagnose`` config of earlier versions names its case with ``name:`` and
+        writes to results/discrepancy/<name>."""
+        if isinstance(data, dict) and "name" in data and "study" not in data:
+            data = dict(data)
+            name = data.pop("name")
+            data["study"] = name
+            if isinstance(name, str):
+                data.setdefault("output", f"{LEGACY_ROOT}/{name}")
+        return data
+
+    @field_serializer("settings")
+    def _explicit_settings(self, settings: DiagnoseSettings) -> dict:
+        """Only the settings the config gives (so variants and config.yaml keep the rest open)."""
+        return settings.model_dump(mode="json", exclude_unset=True)
+
+    @field_validator("report")
+    @classmethod
+    def _report(cls, v):
+        try:
+            ReportConfig.model_validate(v)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            loc = ".".join(str(p) for p in first["loc"])
+            unknown = first["type"] == "extra_forbidden"
+            msg = f"unknown key; known: {sorted(ReportConfig.model_fields)}" if unknown else first["msg"]
+            raise ValueError(f"{loc}: {msg} (value: {first.get('input')!r})") from None
+        return v
+
+    @model_validator(mode="after")
+    def _seeded_runs(self):
+        uses_seed = self.measured.generate is not None and self.measured.generate.seed is None
+        if self.runs > 1 and not uses_seed:
+            where = "measured.generate.seed is given" if self.measured.generate is not None else "the data are fixed"
+            raise ValueError(f"runs: {self.runs} runs would repeat one diagnosis ({where}; only generated data "
+                             "without their own seed change with the run's seed); use runs: 1")
+        return self
+
+
+def check(cfg: Config, source: str, base_dir: Path | None = None) -> None:
+    """Resolve the data file's path (relative to the config's folder if not found as given)."""
+    if cfg.measured.file is None:
+        return
+    path = Path(cfg.measured.file)
+    if not path.is_absolute() and not path.exists() and base_dir is not None and (base_dir / path).exists():
+        path = base_dir / path
+    if not path.exists():
+        raise InputError(f"{source}: measured.file: file not found: {cfg.measured.file}")
+    if path.is_dir():
+        raise InputError(f"{source}: measured.file: is a folder, not a data file: {cfg.measured.file}")
+    cfg.measured.file = str(path)
+
+
+# ---- plan --------------------------------------------------------------------------------
+@functools.lru_cache(maxsize=16)
+def _catalogue(structure: str, options_json: str) -> Catalogue:
+    return get_catalogue(structure, **json.loads(options_json))
+
+
+def catalogue_of(task: dict) -> Catalogue:
+    return _catalogue(task["structure"], json.dumps(task["structure_options"], sort_keys=True))
+
+
+def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
+    """``runs`` diagnoses (seeds ``seed``, ``seed + 1``, ...); the task holds the resolved settings."""
+    task = {
+        "structure": cfg.structure,
+        "structure_options": cfg.structure_options,
+        "start_effects": {k: v or "" for k, v in cfg.start_effects.items()},
+        "measured": cfg.measured.model_dump(mode="json"),
+    }
+    try:
+        catalogue = catalogue_of(task)
+        # the catalogue's recommended settings, overridden by those the config gives
+        settings = DiagnoseSettings(**(dict(catalogue.settings) | cfg.settings.model_dump(exclude_unset=True)))
+        relevant = list(sweep_values)
+        gen = task["measured"]["generate"]
+        if gen is not None and not _magnitude_matters(catalogue, gen):
+            gen["magnitude"] = 1.0
+            relevant = [k for k in relevant if k != "measured.generate.magnitude"]
+    except InputError as exc:
+        raise InputError(f"study {cfg.study!r}: {exc}") from None
+    task["settings"] = settings.model_dump(mode="json")
+    columns = run_columns(task)
+    return [{"label": cfg.structure, "seed": cfg.seed + i, "task": task, "columns": columns, "relevant": relevant}
+            for i in range(cfg.runs)]  # fmt: skip
+
+
+def _magnitude_matters(catalogue: Catalogue, gen: dict) -> bool:
+    """True when some hidden effect has a parameter whose value is drawn (and so scaled)."""
+    return any(p.name not in gen["values"] for e in gen["hidden"] for p in catalogue.effect(e).parameters)
+
+
+def hidden_name(gen: dict) -> str:
+    return "+".join(gen["hidden"]) or NO_CHANGE
+
+
+def run_columns(task: dict) -> dict[str, Any]:
+    """The settings that tell runs apart, as columns of every table."""
+    columns: dict[str, Any] = {"structure": task["structure"]}
+    gen = task["measured"]["generate"]
+    if gen is not None:
+        noise = gen["noise"]
+        columns |= {"hidden_effect": hidden_name(gen), "magnitude": float(gen["magnitude"]),
+                    "noise": noise if isinstance(noise, str) else "custom"}  # fmt: skip
+    return columns
+
+
+def identity(task: dict) -> dict:
+    """The task with a data file replaced by a hash of its content."""
+    measured = task["measured"]
+    if not measured.get("file"):
+        return task
+    try:
+        digest = hashlib.sha256(Path(measured["file"]).read_bytes()).hexdigest()
+    except OSError:
+        digest = f"unreadable:{measured['file']}"
+    return {**task, "measured": {**{k: v for k, v in measured.items() if k != "file"}, "file_sha256": digest}}
+
+
+def preflight(specs: list[dict], build_references: bool = True) -> None:
+    """Check every distinct catalogue, start model and data source before any run starts."""
+    seen = set()
+    for spec in specs:
+        task = spec["task"]
+        key = json.dumps({k: task[k] for k in ("structure", "structure_options", "start_effects", "measured")},
+                         sort_keys=True)  # fmt: skip
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            _check_task(task)
+        except InputError as exc:
+            raise InputError(f"study {spec['study']!r}: {exc}") from None
+        except (KeyError, ValueError, TypeError) as exc:
+            raise InputError(f"study {spec['study']!r}: {type(exc).__name__}: {exc}") from None
+
+
+def _check_task(task: dict) -> None:
+    from framework.discrepancy import likelihood
+    from framework.problem import UpdatingProblem
+
+    catalogue = catalogue_of(task)
+    start = catalogue.check_active(task["start_effects"])
+    gen = task["measured"]["generate"]
+    if gen is not None:
+        catalogue.check_active({e: v for e, v in gen["hidden"].items() if v is not None})
+        known = {p.name for e in gen["hidden"] for p in catalogue.effect(e).parameters}
+        unknown = sorted(set(gen["values"]) - known)
+        if unknown:
+            raise InputError(f"measured.generate.values: {unknown} are not parameters of the hidden effects; "
+                             f"known: {sorted(known)}")  # fmt: skip
+        noise_of(gen)
+        return
+    measured = likelihood.with_noise_model(measured_of(task["measured"], catalogue))
+    UpdatingProblem(catalogue.model(start), measured, objective=likelihood.objective_spec())
+
+
+# ---- one run -----------------------------------------------------------------------------
+def run(spec: dict) -> dict[str, list[dict]]:
+    """One diagnosis and the rows of every table; a calibration or data failure is a row."""
+    t0 = time.perf_counter()
+    task = spec["task"]
+    catalogue = catalogue_of(task)
+    try:
+        measured = measured_of(task["measured"], catalogue, spec["seed"])
+        diagnosis = diagnose(catalogue, measured, DiagnoseSettings(**task["settings"]), start=task["start_effects"])
+    except (ModelEvaluationError, InputError) as exc:
+        log.warning("diagnosis %s seed %s failed: %s", spec["label"], spec["seed"], exc)
+        tables = {t: [] for t in TABLES}
+        tables["summary"] = [{"status": "failed", "error": f"{type(exc).__name__}: {exc}", "n_evaluations": 0}]
+    else:
+        tables = diagnosis_rows(diagnosis)
+        tables["summary"][0] |= {"status": "completed", "error": ""}
+    summary = tables["summary"][0]
+    summary |= {"case": case_name(task, spec["seed"], summary.get("data", "")), **run_facts(task, spec["seed"])}
+    summary["wall_s"] = time.perf_counter() - t0
+    return tables
+
+
+def case_name(task: dict, seed: int, data_name: str = "") -> str:
+    """A readable name of a run: structure__hidden[__mag]__noise__seed for generated data."""
+    gen = task["measured"]["generate"]
+    if gen is None:
+        return f"{task['structure']}__{data_name or source_kind(task['measured'])}"
+    mag = float(gen["magnitude"])
+    magnitude = "" if mag == 1.0 or not gen["hidden"] else f"__mag{mag:g}"
+    noise = gen["noise"] if isinstance(gen["noise"], str) else "custom"
+    return f"{task['structure']}__{hidden_name(gen)}{magnitude}__{noise}__seed{data_seed(task['measured'], seed)}"
+
+
+def run_facts(task: dict, seed: int) -> dict[str, Any]:
+    """The run's configured settings as columns of its summary row."""
+    measured = task["measured"]
+    facts: dict[str, Any] = {"data_source": source_kind(measured)}
+    gen = measured["generate"]
+    if gen is not None:
+        noise = noise_of(gen)
+        facts |= {
+            "data_seed": data_seed(measured, seed),
+            "noise_frequency_std_rel": noise.frequency_std_rel,
+            "noise_shape_std_rel": noise.shape_std_rel,
+            "parameter_error_rel": float(gen["parameter_error_rel"]),
+            "hidden_values": json.dumps(gen["values"], sort_keys=True) if gen["values"] else "",
+        }
+    elif measured.get("builtin") is not None:
+        facts |= {"builtin": measured["builtin"], "builtin_case": measured["case"]}
+    facts["start_effects"] = "+".join(f"{k}[{v}]" if v else k for k, v in task["start_effects"].items())
+    facts["structure_options"] = json.dumps(task["structure_options"], sort_keys=True)
+    facts |= {("calibration_seed" if k == "seed" else k): v for k, v in task["settings"].items()}
+    return facts
+
+
+# ---- analyses and figures ----------------------------------------------------------------
+def analyses(tables: dict, report: dict) -> dict:
+    """``cases`` and ``rates`` when ``report.outcomes`` is true."""
+    from framework.discrepancy.outcomes import cases, rates
+
+    options = ReportConfig.model_validate(report or {})
+    if not options.outcomes or "summary" not in tables:
+        return {}
+    scored = cases(tables["summary"])
+    return {"cases": scored, "rates": rates(scored)}
+
+
+def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
+    """discrepancy.png (a study of one run), showcase/<case>.png, study.png (see module docstring)."""
+    from framework.discrepancy.report import case_figure, study_figure
+
+    options = ReportConfig.model_validate(report or {})
+    out_dir = Path(out_dir)
+    summary = tables.get("summary")
+    written: list[Path] = []
+    if summary is None or summary.empty:
+        return written
+    done = summary[summary["status"] == "completed"]
+    if len(summary) == 1 and len(done) == 1:
+        case_figure(_run_tables(tables, done["run_id"].iloc[0]), out_dir / "discrepancy.png")
+        written.append(out_dir / "discrepancy.png")
+    showcase = done[done["seed"].isin(options.showcase_seeds)]
+    folder = out_dir / "showcase"
+    names = showcase["case"].where(~showcase["case"].duplicated(keep=False),
+                                   showcase["case"] + "__" + showcase["run_id"].str[:8])  # fmt: skip
+    for run_id, name in zip(showcase["run_id"], names):
+        path = folder / f"{name}.png"
+        case_figure(_run_tables(tables, run_id), path)
+        written.append(path)
+    if folder.exists():  # figures of runs no longer shown
+        for stale in set(folder.glob("*.png")) - set(written):
+            stale.unlink()
+    if options.outcomes and tables.get("cases") is not None and not tables["cases"].empty:
+        study_figure(tables["cases"], out_dir / "study.png")
+        written.append(out_dir / "study.png")
+    return written
+
+
+def _run_tables(tables: dict, run_id: str) -> dict:
+    return {name: df[df["run_id"] == run_id] for name, df in tables.items() if "run_id" in df}
+
+
+# ---- gomu diagnose -----------------------------------------------------------------------
+def diagnose_command(path: str, overrides: list[str] | None = None, output: str | None = None) -> int:
+    """``gomu diagnose CONFIG``: run a one-run study of kind ``diagnose`` and print the verdict.
+
+    The config's ``kind`` may be left out; ``output`` replaces the config's.
+    """
+    from framework.study.config import read_with_overrides, validate
+    from framework.study.plan import plan
+    from framework.study.runner import run_study
+
+    data = read_with_overrides(path, overrides, what="diagnose config")
+    data.setdefault("kind", "diagnose")
+    if data["kind"] != "diagnose":
+        raise InputError(f"{path}: kind: gomu diagnose runs configs of kind 'diagnose', got {data['kind']!r}")
+    if output:
+        data["output"] = output
+    cfg = validate(data, source=str(path), base_dir=Path(path).parent)
+    n_runs = len(plan(cfg))
+    if n_runs != 1:
+        raise InputError(f"{path}: gomu diagnose runs one diagnosis, this config plans {n_runs}; "
+                         f"use gomu run {path}")  # fmt: skip
+    tables = run_study(cfg, progress=False)
+    s = tables["summary"].iloc[0]
+    out = cfg.output_dir()
+    if s["status"] != "completed":
+        sys.stderr.write(f"{cfg.study}: diagnosis failed: {s['error']}\ntables in {out}\n")
+        return 1
+    lines = [
+        f"{cfg.study}: {s['conclusion']}",
+        f"named effect(s): {s['named_effect']}",
+        f"gap before: max |freq error| {s['max_freq_error_pct_before']:.2f} %, min MAC {s['min_mac_before']:.3f}, "
+        f"unmatched {s['n_unmatched_before']} (chi2 {s['chi2_before']:.1f}, p {s['p_before']:.3g})",
+        f"gap after:  max |freq error| {s['max_freq_error_pct_after']:.2f} %, min MAC {s['min_mac_after']:.3f}, "
+        f"unmatched {s['n_unmatched_after']} (chi2 {s['chi2_after']:.1f}, p {s['p_after']:.3g})",
+        f"tables and figure in {out}",
+    ]
+    sys.stdout.write("\n".join(lines) + "\n")
+    return 0
