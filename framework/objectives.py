@@ -334,7 +334,8 @@ class Formulation:
     n_residuals: Callable
     split: Callable
     objective_names: tuple[str, ...] = ("Pi_f", "Pi_MAC")
-    #: optional vectorized residuals(freqs (n, m), shapes (n, dof, m), measured, spec)
+    #: optional vectorized residuals(freqs (n, m), shapes (n, dof, m), measured, spec) ->
+    #: (residuals (n, r), ModeCorrelations), or None when it cannot (the per-point path is used)
     batch_residuals: Callable | None = None
     #: optional check of ``ObjectiveSpec.options`` (raises ValueError naming the key); None:
     #: the formulation reads no options

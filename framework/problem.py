@@ -15,6 +15,14 @@ default; process pools and Dask in :mod:`framework.parallel`), passed per call: 
 model is evaluated is an execution detail, not part of the problem, which stays a plain,
 picklable description.
 
+Vectorized models: on the in-process path (runner None or ``modal_many``) a model with
+``modal_arrays`` (:mod:`framework.models.arrays`) solves the whole population in one call
+without a Python object per point; a population's residuals are computed in one call
+(``formulation.batch_residuals``) and its correlations kept as arrays
+(:class:`~framework.objectives.ModeCorrelations`, one ModeCorrelation built when asked). A
+runner's list of ModalResult goes through the same vectorized code, so every runner gives
+the same numbers.
+
 Problem transforms (two damage states at once, :func:`framework.damage.two_state`; the
 SNT derated objective, :func:`framework.optimizers.niching.derated`) follow the same
 protocol: ``parameters``, ``n_params``, ``n_objectives``, ``x_initial``,
@@ -178,7 +186,8 @@ class UpdatingProblem:
         for i, exc in errors.items():
             ok[i] = False
             reasons[i], details[i] = exc.reason, exc.detail
-            log.debug("evaluation failed at %s: %s", self.parameters.as_dict(theta[i]), exc)
+            if log.isEnabledFor(logging.DEBUG):
+                log.debug("evaluation failed at %s: %s", self.parameters.as_dict(theta[i]), exc)
         residuals[~ok] = np.sqrt(self.spec.failure_penalty / r)
         correlations = correlations.where(ok) if isinstance(correlations, ModeCorrelations) else [
             c if ok[i] else None for i, c in enumerate(correlations)]
@@ -221,7 +230,8 @@ class UpdatingProblem:
             out = self.formulation.batch_residuals(freqs[rows], None if shapes is None else shapes[rows],
                                                    self.measured, self.spec) if rows.size else None
             if out is not None or not rows.size:
-                corr = _scatter(out[1] if out is not None else None, rows, n, self.measured)
+                full = out is not None and rows.size == n
+                corr = out[1] if full else _scatter(out[1] if out is not None else None, rows, n, self.measured)
                 if out is not None:
                     R[rows] = out[0]
                 for i in np.flatnonzero(single):  # the per-point path names the zero-norm mode

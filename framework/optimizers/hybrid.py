@@ -24,7 +24,8 @@ points exist. The run's result is the best point of both phases (a polished poin
 worse than its start, which SM evaluates first).
 
 Reported (``extra``; the updating kind writes one row per key): ``global`` (algorithm,
-status, iterations, evaluations, best objective and point of the global phase),
+status, iterations, evaluations, best objective and point of the global phase, and the
+global algorithm's own facts, e.g. SNT's minima),
 ``candidate_1``, ... (start point, global objective, polished objective and point,
 evaluations, iterations, SM status, distance to the best candidate), ``condition_number`` of
 the polish that gave the result, and ``run_columns`` (``global_objective``,
@@ -163,9 +164,9 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     try:
         global_out = module.run(recorder, seed, budget.model_copy(update={"max_evaluations": g.max_evaluations}),
                                 **g.settings)
-        global_status, global_iterations = global_out.status, global_out.n_iterations
+        global_status, global_iterations, global_extra = global_out.status, global_out.n_iterations, global_out.extra
     except BudgetExhausted:
-        global_status, global_iterations = "budget", 0
+        global_status, global_iterations, global_extra = "budget", 0, {}
     X, values = recorder.evaluated()
     picks = distinct_best(X, values, s.n_candidates, s.min_distance)
     global_record = {
@@ -173,7 +174,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         "n_evaluations": recorder.n_evaluations,
         "objective": float(recorder.best_objective) if recorder.has_success else float("nan"),
         "x_best": None if recorder.best_x is None else recorder.best_x.tolist(),
-        "n_points": int(len(X)), "n_failed": recorder.n_failed,
+        "n_points": int(len(X)), "n_failed": recorder.n_failed, "extra": global_extra,
     }
 
     # ---- local phase
