@@ -55,7 +55,7 @@ def test_hybrid_keeps_both_phases_within_the_total_budget(algorithm):
         assert c["polished_objective"] <= c["global_objective"]
     assert r.objective == pytest.approx(min(c["polished_objective"] for c in cands), rel=1e-12)
     assert r.extra[f"candidate_{cols['best_candidate']}"]["polished_objective"] == r.objective
-    assert r.objective < 1e-4 < g["objective"] or r.objective <= g["objective"]
+    assert r.objective <= g["objective"]
     json.dumps(r.extra, allow_nan=True)
 
 

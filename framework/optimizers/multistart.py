@@ -39,21 +39,23 @@ with that budget. If the target objective is met, no further batch is started (s
 
 Early stopping (``early_stop``). Let the incumbent P* be the best objective found by the
 earlier batches. A start is stopped as soon as it has spent ``check_evaluations`` model
-evaluations (default 3 (k + 1): three forward-difference SM iterations for k parameters)
-and its best objective so far is still above ``stop_factor`` x P* (default 10). The first
-batch is never stopped (no incumbent yet). Why this rule: it costs no extra model
-evaluation and uses only numbers known before the batch (deterministic). A Gauss-Newton
-bound (||r||^2 - ||J dx||^2 from the linearized model) would need a Jacobian first and
-bounds only the linearized model, not the true objective, so it is no safer. The
-sensitivity method decreases the objective monotonically and converges fast (superlinearly
-near a small-residual minimum), so a start in the basin of a minimum as good as the
-incumbent's is typically far below 10 P* after three iterations. It is a heuristic: a start
-that would reach a better minimum only slowly can be stopped; raise ``stop_factor`` or
+evaluations (default 3 (k + 1): three forward-difference SM iterations for k parameters,
+more iterations where the Jacobian costs less) and its best objective so far is still
+above ``stop_factor`` x P* (default 10). The first batch is never stopped (no incumbent
+yet). Why this rule: it costs no extra model evaluation and uses only numbers known before
+the batch (deterministic). A Gauss-Newton bound (||r||^2 - ||J dx||^2 from the linearized
+model) would need a Jacobian first and bounds only the linearized model, not the true
+objective, so it is no safer. The sensitivity method decreases the objective monotonically
+and converges fast (superlinearly near a small-residual minimum), so a start in the basin
+of a minimum as good as the incumbent's is typically far below 10 P* after three
+iterations. It is a heuristic: a start that would reach a better minimum only slowly can
+be stopped, and so is a start that would only find the incumbent's minimum again (it
+cannot beat it by more than the solver's tolerances); raise ``stop_factor`` or
 ``check_evaluations`` (or set ``early_stop: false``) when in doubt, and compare.
 
 Reported (``extra``; one row per key in the updating kind's ``extra`` table): ``start_1``,
 ... (start point, objective, best point, evaluations, iterations, SM status or
-"stopped_early"/"not_run", batch, incumbent it was checked against), ``condition_number``
+"stopped_early"/"not_run", batch, budget, ``stop_threshold`` = stop_factor x P*), ``condition_number``
 of the best start, and ``run_columns`` (``n_starts_run``, ``n_stopped_early``,
 ``best_start``) for the runs table. A start whose worker fails (not a failed model
 evaluation, which is recorded as usual) ends the run with an error.
