@@ -14,17 +14,33 @@ with the number of new model evaluations (e.g. a progress bar).
 A child evaluator (``evaluator.child(problem, max_evaluations)``) serves a sub-search on a
 transformed problem (SNT's derated objective): it has its own best point and budget, and
 every evaluation also counts in the parent, which records the untransformed values
-(``Evaluations.source``).
+(``Evaluations.source``). A sub-run evaluated in another process (the starts of a
+multi-start) is counted with ``evaluator.merge(sub.export())``.
 """
 
 from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from framework.problem import Evaluations, Runner, as_points
+
+
+@dataclass(frozen=True)
+class EvaluationRecord:
+    """An evaluator's record as plain data: model evaluations, objective per evaluated point
+    (NaN where it failed), failure counts and examples, failed points (bytes of x), best point."""
+
+    n_evaluations: int
+    values: np.ndarray
+    failures: dict[str, int]
+    failure_examples: dict[str, str]
+    failed: frozenset
+    best_x: np.ndarray | None
+    best_objective: float
 
 
 class BudgetExhausted(Exception):
@@ -117,6 +133,31 @@ class Evaluator:
             self.parent._record(X, ev.source if ev.source is not None else ev)
         elif self.progress is not None:
             self.progress(n_new)
+
+    # ---- evaluations made elsewhere (a sub-run in a worker process) -------------------------
+    def export(self) -> EvaluationRecord:
+        """What this evaluator recorded, as plain picklable data (see :meth:`merge`)."""
+        values = np.concatenate(self._values) if self._values else np.array([])
+        return EvaluationRecord(self.n_evaluations, values, dict(self.failures), dict(self.failure_examples),
+                                frozenset(self._failed), self.best_x, float(self.best_objective))
+
+    def merge(self, record: EvaluationRecord) -> None:
+        """Count a sub-run evaluated elsewhere (e.g. an SM start on another worker) as this run's
+        evaluations, as if they had been made here in that order (count, history, best point,
+        failures; the parent chain and progress too). Its budget was checked where it ran."""
+        self.n_evaluations += record.n_evaluations
+        self._values.append(np.asarray(record.values, float))
+        self.failures.update(record.failures)
+        for reason, example in record.failure_examples.items():
+            self.failure_examples.setdefault(reason, example)
+        self._failed |= record.failed
+        if record.best_x is not None and record.best_objective < self.best_objective:
+            self.best_objective = float(record.best_objective)
+            self.best_x = np.array(record.best_x, dtype=float)
+        if self.parent is not None:
+            self.parent.merge(record)
+        elif self.progress is not None and record.n_evaluations:
+            self.progress(record.n_evaluations)
 
     # the three views used by the adapters
     def objective(self, X: np.ndarray) -> np.ndarray:

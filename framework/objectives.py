@@ -28,7 +28,7 @@ above. Every formulation is named in the static table ``FORMULATIONS`` (name ->
 from __future__ import annotations
 
 import importlib
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Annotated, Any, ClassVar, Literal
 
@@ -176,6 +176,45 @@ class ModeCorrelation:
     matched: np.ndarray
 
 
+class ModeCorrelations(Sequence):
+    """The :class:`ModeCorrelation` of every point of a population, kept as arrays (n, m).
+
+    An item is built only when asked (no per-point objects on the evaluation path);
+    ``present[i]`` False (a failed point) gives None.
+    """
+
+    def __init__(self, analytical_index, f_measured_hz, f_model_hz, frequency_error, mac, matched, present=None):
+        self.analytical_index = analytical_index
+        self.f_measured_hz = f_measured_hz
+        self.f_model_hz = f_model_hz
+        self.frequency_error = frequency_error
+        self.mac = mac
+        self.matched = matched
+        self.present = np.ones(len(f_model_hz), dtype=bool) if present is None else present
+
+    def __len__(self) -> int:
+        return len(self.f_model_hz)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        if not self.present[i]:
+            return None
+        return ModeCorrelation(self.analytical_index[i], self.f_measured_hz, self.f_model_hz[i],
+                               self.frequency_error[i], self.mac[i], self.matched[i])
+
+    def set(self, i: int, corr: ModeCorrelation) -> None:
+        """Put point i's correlation (computed on its own) into the arrays."""
+        self.analytical_index[i], self.f_model_hz[i] = corr.analytical_index, corr.f_model_hz
+        self.frequency_error[i], self.mac[i], self.matched[i] = corr.frequency_error, corr.mac, corr.matched
+        self.present[i] = True
+
+    def where(self, present: np.ndarray) -> ModeCorrelations:
+        """The same correlations with only the points ``present`` (n,) kept."""
+        return ModeCorrelations(self.analytical_index, self.f_measured_hz, self.f_model_hz, self.frequency_error,
+                                self.mac, self.matched, self.present & present)
+
+
 def correlation_table(corr: ModeCorrelation, measured: MeasuredModes):
     """One row per measured mode: mode, label, f_measured_hz, f_model_hz, error_pct, mac, matched."""
     import pandas as pd
@@ -239,8 +278,9 @@ def spec_residuals_batch(freqs: np.ndarray, shapes: np.ndarray, measured: Measur
     """Vectorized :func:`spec_residuals` for a population with equal mode counts.
 
     freqs (n, m_a), shapes (n, n_dof, m_a) already restricted to the measured DOFs (or None).
-    Returns residuals (n, r) and per-point ModeCorrelation, or None if the population is
-    too large to pair by enumeration (the caller then uses the per-point path).
+    Returns residuals (n, r) and the points' correlations (:class:`ModeCorrelations`), or
+    None if the population is too large to pair by enumeration (the caller then uses the
+    per-point path).
     """
     from framework.correlation import mac_matrix_batch, pair_modes_batch
 
@@ -266,8 +306,7 @@ def spec_residuals_batch(freqs: np.ndarray, shapes: np.ndarray, measured: Measur
     else:
         r = r_f
     mac_out = mac if use_shapes else np.full_like(eps, np.nan)
-    corrs = [ModeCorrelation(idx[i], fe, fa[i], eps[i], mac_out[i], matched[i]) for i in range(n)]
-    return r, corrs
+    return r, ModeCorrelations(idx, fe, fa, eps, mac_out, matched)
 
 
 def use_shape_term(measured: MeasuredModes, spec: ObjectiveSpec) -> bool:
@@ -295,7 +334,8 @@ class Formulation:
     n_residuals: Callable
     split: Callable
     objective_names: tuple[str, ...] = ("Pi_f", "Pi_MAC")
-    #: optional vectorized residuals(freqs (n, m), shapes (n, dof, m), measured, spec)
+    #: optional vectorized residuals(freqs (n, m), shapes (n, dof, m), measured, spec) ->
+    #: (residuals (n, r), ModeCorrelations), or None when it cannot (the per-point path is used)
     batch_residuals: Callable | None = None
     #: optional check of ``ObjectiveSpec.options`` (raises ValueError naming the key); None:
     #: the formulation reads no options

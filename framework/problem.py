@@ -15,6 +15,14 @@ default; process pools and Dask in :mod:`framework.parallel`), passed per call: 
 model is evaluated is an execution detail, not part of the problem, which stays a plain,
 picklable description.
 
+Vectorized models: on the in-process path (runner None or ``modal_many``) a model with
+``modal_arrays`` (:mod:`framework.models.arrays`) solves the whole population in one call
+without a Python object per point; a population's residuals are computed in one call
+(``formulation.batch_residuals``) and its correlations kept as arrays
+(:class:`~framework.objectives.ModeCorrelations`, one ModeCorrelation built when asked). A
+runner's list of ModalResult goes through the same vectorized code, so every runner gives
+the same numbers.
+
 Problem transforms (two damage states at once, :func:`framework.damage.two_state`; the
 SNT derated objective, :func:`framework.optimizers.niching.derated`) follow the same
 protocol: ``parameters``, ``n_params``, ``n_objectives``, ``x_initial``,
@@ -32,9 +40,11 @@ import pandas as pd
 
 from framework.errors import InputError, ModelEvaluationError
 from framework.measurements import MeasuredModes
+from framework.models.arrays import ModalArrays, array_method
 from framework.models.base import ModalResult, StructuralModel, modal_many
 from framework.objectives import (
     ModeCorrelation,
+    ModeCorrelations,
     ObjectiveSpec,
     check_constraints,
     correlation_table,
@@ -163,65 +173,128 @@ class UpdatingProblem:
         """Evaluate points X (n, k) in normalized coordinates (clipped to [0, 1]); pure."""
         X = as_points(X, self.n_params)
         theta = self.parameters.to_physical(X)
-        thetas = [self.parameters.as_dict(t) for t in theta]
-        results = runner(self.model, thetas) if runner is not None else modal_many(self.model, thetas)
-        n, r = len(thetas), self.n_residuals
+        n, r, m = len(X), self.n_residuals, self.n_modal_residuals
         residuals = np.empty((n, r))
+        residuals[:, m:] = penalty_residuals(theta, X, self.parameters, self.spec)
+        residuals[:, :m], errors, correlations = self._modal_residuals(self._solve(theta, runner))
         ok = np.ones(n, dtype=bool)
+        ok[list(errors)] = False
+        for i in np.flatnonzero(ok & ~np.all(np.isfinite(residuals), axis=1)):
+            errors[int(i)] = ModelEvaluationError("non_finite_residual", str(residuals[i]))
         reasons: list[str | None] = [None] * n
         details: list[str] = [""] * n
-        correlations: list[ModeCorrelation | None] = [None] * n
-        penalties = penalty_residuals(theta, X, self.parameters, self.spec)
-        fail_value = np.sqrt(self.spec.failure_penalty / r)
-        batch = self._batch_residuals(results)
-        for i, res in enumerate(results):
-            if isinstance(res, ModalResult):
-                try:
-                    if batch is not None:
-                        modal_r, corr = batch[0][i], batch[1][i]
-                    else:
-                        modal_r, corr = self.formulation.residuals(res, self.measured, self.spec)
-                    residuals[i, : self.n_modal_residuals] = modal_r
-                    residuals[i, self.n_modal_residuals :] = penalties[i]
-                    correlations[i] = corr
-                    if not np.all(np.isfinite(residuals[i])):
-                        raise ModelEvaluationError("non_finite_residual", str(residuals[i]))
-                    continue
-                except ModelEvaluationError as exc:
-                    res = exc
-                except (ValueError, KeyError, IndexError) as exc:
-                    res = ModelEvaluationError("correlation_failed", f"{type(exc).__name__}: {exc}")
-            if not isinstance(res, ModelEvaluationError):
-                res = ModelEvaluationError("model_error", repr(res))
+        for i, exc in errors.items():
             ok[i] = False
-            reasons[i] = res.reason
-            details[i] = res.detail
-            residuals[i] = fail_value
-            correlations[i] = None
-            log.debug("evaluation failed at %s: %s", thetas[i], res)
+            reasons[i], details[i] = exc.reason, exc.detail
+            if log.isEnabledFor(logging.DEBUG):
+                log.debug("evaluation failed at %s: %s", self.parameters.as_dict(theta[i]), exc)
+        residuals[~ok] = np.sqrt(self.spec.failure_penalty / r)
+        correlations = correlations.where(ok) if isinstance(correlations, ModeCorrelations) else [
+            c if ok[i] else None for i, c in enumerate(correlations)]
         objective = np.sum(residuals**2, axis=1)
-        F = self.formulation.split(residuals[:, : self.n_modal_residuals], self.measured, self.spec)
-        F = F + np.sum(residuals[:, self.n_modal_residuals :] ** 2, axis=1)[:, None]
+        F = self.formulation.split(residuals[:, :m], self.measured, self.spec)
+        F = F + np.sum(residuals[:, m:] ** 2, axis=1)[:, None]
         F[~ok] = self.spec.failure_penalty
         return Evaluations(objective, residuals, F, ok, reasons, details, correlations)
 
-    def _batch_residuals(self, results: list):
-        """Vectorized residuals when every point succeeded with the same modes, else None."""
-        fn = self.formulation.batch_residuals
-        if fn is None or len(results) < 2 or not all(isinstance(r, ModalResult) for r in results):
-            return None
-        n_modes = {r.n_modes for r in results}
-        if len(n_modes) != 1:
-            return None
+    def _solve(self, theta: np.ndarray, runner: Runner | None):
+        """Modes of the points theta (n, k): a :class:`ModalArrays` in process for a model with
+        ``modal_arrays`` (no per-point objects), else the runner's list (ModalResult or error)."""
+        if runner is None or runner is modal_many:
+            arrays = array_method(self.model)
+            if arrays is not None:
+                return arrays(theta, self.parameters.names)
+        thetas = [self.parameters.as_dict(t) for t in theta]
+        return runner(self.model, thetas) if runner is not None else modal_many(self.model, thetas)
+
+    def _modal_residuals(self, modal):
+        """Modal residuals (n, r_m), failed points {index: ModelEvaluationError} and correlations.
+
+        A population of two or more points is done in one vectorized call when the
+        formulation has ``batch_residuals`` and the solved points share their mode count
+        (failed points left out); otherwise, and for points whose shapes vanish at the
+        measured DOFs, point by point. Both give the same numbers to rounding (tests).
+        """
+        n = len(modal)
+        R = np.zeros((n, self.n_modal_residuals))
+        stacked = self._stack(modal) if n >= 2 and self.formulation.batch_residuals is not None else None
+        if stacked is not None:
+            freqs, shapes, errors = stacked
+            usable = np.ones(n, dtype=bool)
+            usable[list(errors)] = False
+            single = np.zeros(n, dtype=bool)
+            if shapes is not None:
+                single = usable & np.any(np.sum(shapes**2, axis=1) == 0, axis=1)
+            usable &= ~single
+            rows = np.flatnonzero(usable)
+            out = self.formulation.batch_residuals(freqs[rows], None if shapes is None else shapes[rows],
+                                                   self.measured, self.spec) if rows.size else None
+            if out is not None or not rows.size:
+                full = out is not None and rows.size == n
+                corr = out[1] if full else _scatter(out[1] if out is not None else None, rows, n, self.measured)
+                if out is not None:
+                    R[rows] = out[0]
+                for i in np.flatnonzero(single):  # the per-point path names the zero-norm mode
+                    res = modal.result(i) if isinstance(modal, ModalArrays) else modal[i]
+                    out_i, err = self._point(res)
+                    if err is not None:
+                        errors[int(i)] = err
+                    else:
+                        R[i] = out_i[0]
+                        corr.set(int(i), out_i[1])
+                return R, errors, corr
+        errors = {}
+        correlations: list[ModeCorrelation | None] = [None] * n
+        for i in range(n):
+            res = modal.result(i) if isinstance(modal, ModalArrays) else modal[i]
+            out_i, err = self._point(res)
+            if err is not None:
+                errors[i] = err
+            else:
+                R[i], correlations[i] = out_i
+        return R, errors, correlations
+
+    def _point(self, res):
+        """((modal residuals, correlation), None) of one point's modal result, or (None, error)."""
+        if isinstance(res, ModalResult):
+            try:
+                return self.formulation.residuals(res, self.measured, self.spec), None
+            except ModelEvaluationError as exc:
+                return None, exc
+            except (ValueError, KeyError, IndexError) as exc:
+                return None, ModelEvaluationError("correlation_failed", f"{type(exc).__name__}: {exc}")
+        if isinstance(res, ModelEvaluationError):
+            return None, res
+        return None, ModelEvaluationError("model_error", repr(res))
+
+    def _stack(self, modal):
+        """(frequencies (n, m), shapes at the measured DOFs (n, d, m) or None, errors) of the
+        solved points, or None when their mode counts differ or a measured DOF is missing."""
         use_shapes = self.spec.use_shapes and self.measured.has_shapes
+        if isinstance(modal, ModalArrays):
+            errors = dict(modal.errors)
+            if not use_shapes:
+                return modal.frequencies_hz, None, errors
+            index = {d: j for j, d in enumerate(modal.dofs)}
+            if any(d not in index for d in self.measured.dofs):
+                return None
+            return modal.frequencies_hz, modal.shapes[:, [index[d] for d in self.measured.dofs], :], errors
+        solved = [i for i, res in enumerate(modal) if isinstance(res, ModalResult)]
+        if not solved or len({modal[i].n_modes for i in solved}) != 1:
+            return None
+        errors = {i: self._point(res)[1] for i, res in enumerate(modal) if not isinstance(res, ModalResult)}
+        m_a = modal[solved[0]].n_modes
+        freqs = np.zeros((len(modal), m_a))
+        freqs[solved] = np.stack([modal[i].frequencies_hz for i in solved])
+        if not use_shapes:
+            return freqs, None, errors
         try:
-            shapes = np.stack([r.at(self.measured.dofs) for r in results]) if use_shapes else None
+            at = np.stack([modal[i].at(self.measured.dofs) for i in solved])
         except KeyError:
             return None
-        if use_shapes and np.any(np.sum(shapes**2, axis=1) == 0):
-            return None  # the per-point path reports the zero-norm mode
-        freqs = np.stack([r.frequencies_hz for r in results])
-        return fn(freqs, shapes, self.measured, self.spec)
+        shapes = np.zeros((len(modal), len(self.measured.dofs), m_a))
+        shapes[solved] = at
+        return freqs, shapes, errors
 
     # ---- uncounted conveniences (a run counts through its Evaluator) ----------------------
     def objective(self, X: np.ndarray, runner: Runner | None = None) -> np.ndarray:
@@ -252,6 +325,19 @@ class UpdatingProblem:
     def mode_table(self, theta: np.ndarray, runner: Runner | None = None) -> pd.DataFrame:
         """One row per measured mode at physical point theta: f, error %, MAC, matched."""
         return correlation_table(self.correlation_at(theta, runner), self.measured)
+
+
+def _scatter(corr, rows: np.ndarray, n: int, measured: MeasuredModes) -> ModeCorrelations:
+    """Correlations of the points ``rows`` (a ModeCorrelations of len(rows), or None) placed in a
+    population of n points; the other points have none."""
+    m = measured.n_modes
+    index, matched = np.full((n, m), -1), np.zeros((n, m), dtype=bool)
+    f_model, eps, mac = (np.full((n, m), np.nan) for _ in range(3))
+    present = np.zeros(n, dtype=bool)
+    if corr is not None:
+        index[rows], f_model[rows], eps[rows] = corr.analytical_index, corr.f_model_hz, corr.frequency_error
+        mac[rows], matched[rows], present[rows] = corr.mac, corr.matched, True
+    return ModeCorrelations(index, measured.frequencies_hz, f_model, eps, mac, matched, present)
 
 
 def _check_type(argument: str, value, kind, expected: str) -> None:

@@ -29,6 +29,8 @@ SMALL = {
     "sm": {"start": "random"},
     "snt": {"n_minima": 2, "pso": {"swarm_size": 10}},
     "nsga2": {"pop_size": 12, "n_generations": 8},
+    "hybrid": {"global": {"algorithm": "pso", "settings": {"swarm_size": 10}, "max_evaluations": 150}},
+    "multistart": {"n_starts": 4, "batch_size": 2},
 }
 
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from framework.errors import InputError, ModelEvaluationError
 from framework.measurements import MeasuredModes
+from framework.models.arrays import ModalArrays, theta_matrix
 from framework.models.base import ModalResult, full_theta
 from framework.parameters import Parameter, ParameterSet
 
@@ -129,25 +130,26 @@ class ThreeDofFrame:
         return ModalResult(f, _to_measured_dofs(phi), DOFS)
 
     def modal_batch(self, thetas: Sequence[Mapping[str, float]]) -> list:
-        """Vectorized: one batched Cholesky-reduced eigh for all points."""
+        """Vectorized: one batched Cholesky-reduced eigh for all points (see ``modal_arrays``)."""
         if len(thetas) == 0:
             return []
         values = [full_theta(PARAMETERS, t) for t in thetas]
-        cols = {n: np.array([v[n] for v in values]) for n in PARAMETERS.names}
+        theta = np.array([[v[n] for n in PARAMETERS.names] for v in values])
+        return self.modal_arrays(theta, PARAMETERS.names).results()
+
+    def modal_arrays(self, theta: np.ndarray, names: Sequence[str]) -> ModalArrays:
+        """Modes of points theta (n, len(names)) as arrays (:mod:`framework.models.arrays`): K of
+        every point stacked (n, 3, 3), A = L^-1 K L^-T with M = L L^T, one batched eigh."""
+        cols = theta_matrix(PARAMETERS, theta, names)
         K = stiffness_matrix(cols["kxx"], cols["kyy"], cols["kxy"], cols["krr"], cols["ex"], cols["ey"])
         L = np.linalg.cholesky(self.mass())
         Li = np.linalg.inv(L)
         A = Li @ K @ Li.T
         w2, psi = np.linalg.eigh(0.5 * (A + np.swapaxes(A, -1, -2)))
         phi = _to_measured_dofs(Li.T @ psi)
-        out: list = []
-        for i in range(len(values)):
-            if np.any(w2[i] <= 0):
-                out.append(ModelEvaluationError("indefinite_matrix", f"eigenvalues {w2[i].tolist()}"))
-            else:
-                out.append(ModalResult(np.sqrt(w2[i]) / (2 * math.pi), phi[i], DOFS))
-        return out
-
+        bad = np.flatnonzero(np.any(w2 <= 0, axis=1))
+        errors = {int(i): ModelEvaluationError("indefinite_matrix", f"eigenvalues {w2[i].tolist()}") for i in bad}
+        return ModalArrays(np.sqrt(np.maximum(w2, 0.0)) / (2 * math.pi), phi, DOFS, errors)
 
 def make_model(added_mass_kg: float = 0.0, case: str | None = None) -> ThreeDofFrame:
     """The 3-DOF model; ``case`` (a key of CASES) sets the added mass."""

@@ -28,6 +28,8 @@ OPTIMIZERS: dict[str, tuple[str, str]] = {
     "sm": ("framework.optimizers.sm", "SMSettings"),
     "snt": ("framework.optimizers.niching", "SNTSettings"),
     "nsga2": ("framework.optimizers.nsga2", "NSGA2Settings"),
+    "hybrid": ("framework.optimizers.hybrid", "HybridSettings"),
+    "multistart": ("framework.optimizers.multistart", "MultiStartSettings"),
 }
 
 

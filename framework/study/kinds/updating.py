@@ -7,7 +7,9 @@ cases with the updated values. Tables:
 - ``runs``: one row per run: structure, algorithm, objective (best Pi), n_evaluations,
   n_iterations, wall_s, status (target, stalled, converged, budget, max_iterations,
   completed, failed, error), error, n_failed_evaluations, failures, message,
-  condition_number (SM), and every optimizer setting as its own column;
+  condition_number (SM), every optimizer setting as its own column, and the result columns an
+  adapter reports as ``extra["run_columns"]`` (hybrid: global_objective, global_evaluations,
+  local_evaluations, ...; multistart: n_starts_run, n_stopped_early, best_start);
 - ``parameters``: run x parameter: unit, initial, lower, upper, value, ratio, normalized
   (no rows for a failed run: a failed point is not an updated value);
 - ``modes``: run x case x measured mode: f_measured_hz, f_model_hz, error_pct, mac, matched;
@@ -377,9 +379,10 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
         "message": result.message,
         "condition_number": result.extra.get("condition_number", np.nan),
         **setting_columns(task["settings"]),
+        **result.extra.get("run_columns", {}),  # an adapter's own result columns (hybrid phases)
     })
     tables["history"] = history_rows(result.history)
-    tables["extra"] = extra_rows(result.extra)
+    tables["extra"] = extra_rows({k: v for k, v in result.extra.items() if k != "run_columns"})
     if failed:
         return tables
     params = problem.parameters
