@@ -7,6 +7,31 @@ function, optionally runs a static (gravity) analysis and keeps its state, solve
 eigenproblem K phi = omega^2 M phi and reads the eigenvectors at the measured DOFs
 (f = omega / 2 pi). Every built-in OpenSees structure of the framework uses this path.
 
+Eigen solvers (``solver``):
+
+- ``"scipy"`` (default): the tangent stiffness and the mass are extracted from OpenSees
+  (:func:`framework.models.opensees_matrices.stiffness_and_mass`: dense ``printA`` of a
+  FullGeneral system, Plain numberer, Transformation constraints) and solved with scipy
+  (:func:`framework.models.eigen_solve.lowest_modes`: exact condensation of massless DOFs
+  and dense eigh up to ``eigen_solve.DENSE_LIMIT`` equations, shift-invert Lanczos with a
+  fixed start vector above). The modes are a deterministic, bit-reproducible function of
+  theta in any process and whatever ran before; shapes are mass-normalized (phi' M phi = 1,
+  kg^-1/2 for translations) with the largest-magnitude measured component positive. The
+  extraction costs O(n^2) memory and time per evaluation for n equations (two dense n x n
+  matrices: ~0.8 MB each at n = 318, the detailed lab frame; 3 MB at n = 624, the bridge).
+  Measured DOFs on nodes constrained by ``equalDOF``, ``rigidLink`` or ``rigidDiaphragm``
+  are recovered from the retained node; for a measured DOF on a node constrained otherwise
+  (``equalDOF_Mixed``, ``equationConstraint``, or a command imported by name, which the
+  record of :func:`~framework.models.opensees_matrices.recording_constraints` misses) the
+  evaluation falls back to OpenSees' deterministic ``-fullGenLapack`` (slow), with the same
+  normalization. A ``postprocess`` receives an ``ops`` whose ``nodeEigenvector`` answers
+  from these modes.
+- an OpenSees eigen flag (``"-genBandArpack"``, ``"-fullGenLapack"``, ``"-symmBandLapack"``,
+  or ``""`` for OpenSees' default): OpenSees solves, shapes as OpenSees returns them.
+  ARPACK (``-genBandArpack``, the default of ``ops.eigen``) starts from a random vector whose
+  generator state persists in the process, so its results differ at ~1e-15 with the history
+  of the process; ``-fullGenLapack`` is deterministic but ~25x slower.
+
 The build function must be importable at module level (for process and Dask workers).
 A build that crashes the process (a segfault in native code, an abort after a NaN reached
 OpenSees) or hangs can only be contained by evaluating in an isolated worker
@@ -27,12 +52,20 @@ import numpy as np
 
 from framework.errors import MissingDependencyError, ModelEvaluationError
 from framework.models.base import ModalResult, full_theta
+from framework.models.eigen_solve import lowest_modes, sign_rule
+from framework.models.opensees_matrices import DofMap, recording_constraints, stiffness_and_mass
 from framework.parameters import ParameterSet
 
 log = logging.getLogger(__name__)
 
 #: OpenSees direction numbers of a 3D node with 6 DOFs.
 DIRECTIONS = {"ux": 1, "uy": 2, "uz": 3, "rx": 4, "ry": 5, "rz": 6}
+
+#: The default solver: matrices extracted from OpenSees, modes from scipy (deterministic).
+SCIPY_SOLVER = "scipy"
+
+#: OpenSees solver used when a measured DOF cannot be mapped to equations (deterministic).
+FALLBACK_SOLVER = "-fullGenLapack"
 
 #: OpenSees' full generalized LAPACK solver reports an eigenvalue it cannot determine (e.g.
 #: after a NaN stiffness reached the domain) as the largest double, not as inf or NaN.
@@ -76,10 +109,11 @@ class OpenSeesModel:
     build: ``build(values) -> info``; values holds every parameter (initial values
     overridden by the evaluated point) plus ``fixed``. measured_dofs: {label: (node tag,
     direction)} with direction 1..6 or a name from :data:`DIRECTIONS`. n_modes: modes
-    to compute. gravity: :class:`GravityAnalysis` or None. solver: eigen solver flag
-    ("-genBandArpack", "-fullGenLapack", "-symmBandLapack"). postprocess: optional
-    ``postprocess(result, info, ops) -> ModalResult`` called while the domain is alive
-    (e.g. to classify modes by kinetic energy); ``info`` is what build returned.
+    to compute. gravity: :class:`GravityAnalysis` or None. solver: "scipy" (default,
+    deterministic) or an OpenSees eigen flag ("-genBandArpack", "-fullGenLapack",
+    "-symmBandLapack", "" for OpenSees' default), see the module docstring. postprocess:
+    optional ``postprocess(result, info, ops) -> ModalResult`` called while the domain is
+    alive (e.g. to classify modes by kinetic energy); ``info`` is what build returned.
     dof_scale: optional {label: factor} applied to the shape rows (e.g. b/2 for a
     rotation compared with translations).
     """
@@ -89,7 +123,7 @@ class OpenSeesModel:
     measured_dofs: Mapping[str, tuple[int, int | str]]
     n_modes: int = 10
     gravity: GravityAnalysis | None = None
-    solver: str = "-genBandArpack"
+    solver: str = SCIPY_SOLVER
     fixed: Mapping[str, Any] = field(default_factory=dict)
     postprocess: Callable[[ModalResult, Any, Any], ModalResult] | None = None
     dof_scale: Mapping[str, float] = field(default_factory=dict)
@@ -100,6 +134,9 @@ class OpenSeesModel:
             raise TypeError(f"build must be callable, got {self.build!r}")
         if self.n_modes < 1:
             raise ValueError(f"n_modes must be >= 1, got {self.n_modes}")
+        if self.solver != SCIPY_SOLVER and self.solver and not self.solver.startswith("-"):
+            raise ValueError(f"solver must be {SCIPY_SOLVER!r} or an OpenSees eigen flag such as '-genBandArpack', "
+                             f"got {self.solver!r}")
         resolved = {}
         for label, (node, direction) in self.measured_dofs.items():
             if isinstance(direction, str):
@@ -123,7 +160,7 @@ class OpenSeesModel:
         ops.wipe()
         try:
             try:
-                with finite_arguments(ops):
+                with finite_arguments(ops), recording_constraints(ops) as constraints:
                     info = self.build(values)
             except ModelEvaluationError:
                 raise
@@ -133,19 +170,96 @@ class OpenSeesModel:
                 raise ModelEvaluationError("build_failed", f"{type(exc).__name__}: {exc}") from exc
             if self.gravity is not None:
                 run_static(ops, self.gravity)
-            omega2 = eigen(ops, self.n_modes, self.solver)
+            if self.solver == SCIPY_SOLVER:
+                omega2, shapes, view = self._scipy_modes(ops, constraints)
+            else:
+                omega2 = eigen(ops, self.n_modes, self.solver)
+                shapes = self._opensees_shapes(ops, omega2.size)
+                view = ops
             freqs = np.sqrt(np.maximum(omega2, 0.0)) / (2.0 * math.pi)
-            shapes = np.empty((len(self.measured_dofs), len(freqs)))
-            for i, (label, (node, direction)) in enumerate(self.measured_dofs.items()):
-                scale = float(self.dof_scale.get(label, 1.0))
-                for j in range(len(freqs)):
-                    shapes[i, j] = scale * ops.nodeEigenvector(node, j + 1, direction)
             result = ModalResult(freqs, shapes, self.dofs, meta={"omega2": omega2})
             if self.postprocess is not None:
-                result = self.postprocess(result, info, ops)
+                result = self.postprocess(result, info, view)
             return result
         finally:
             ops.wipe()
+
+    def _scale(self) -> np.ndarray:
+        return np.array([float(self.dof_scale.get(label, 1.0)) for label in self.measured_dofs])
+
+    def _opensees_shapes(self, ops, n_modes: int) -> np.ndarray:
+        """Shapes at the measured DOFs as OpenSees' last eigen analysis left them."""
+        shapes = np.empty((len(self.measured_dofs), n_modes))
+        for i, (node, direction) in enumerate(self.measured_dofs.values()):
+            for j in range(n_modes):
+                shapes[i, j] = ops.nodeEigenvector(node, j + 1, direction)
+        return shapes * self._scale()[:, None]
+
+    def _scipy_modes(self, ops, constraints) -> tuple[np.ndarray, np.ndarray, Any]:
+        """(omega^2, measured shapes, ops view for postprocess) from extracted K and M.
+
+        Shapes are mass-normalized with the largest-magnitude measured component positive.
+        """
+        stiffness, mass = stiffness_and_mass(ops)
+        dof_map = DofMap(ops, constraints)
+        rows = [dof_map.row(node, direction) for node, direction in self.measured_dofs.values()]
+        if any(row is None for row in rows):
+            return self._fallback_modes(ops, dof_map, mass)
+        omega2, phi = lowest_modes(stiffness, mass, self.n_modes)
+        shapes = np.array([row.of(phi) for row in rows]).reshape(len(rows), -1) * self._scale()[:, None]
+        signs = sign_rule(shapes, phi)
+        phi = phi * signs
+        return omega2, shapes * signs, ModeShapeOps(ops, dof_map, phi)
+
+    def _fallback_modes(self, ops, dof_map: DofMap, mass: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any]:
+        """OpenSees' deterministic full LAPACK solver, normalized as :meth:`_scipy_modes`."""
+        log.warning(
+            "%s: a measured DOF lies on a node whose multi-point constraint is not known (not created "
+            "through ops.equalDOF/rigidLink/rigidDiaphragm); solving with OpenSees' %s",
+            self.name,
+            FALLBACK_SOLVER,
+        )
+        omega2 = eigen(ops, self.n_modes, FALLBACK_SOLVER)
+        phi = np.zeros((mass.shape[0], omega2.size))
+        for node in ops.getNodeTags():
+            rows = dof_map.node_rows(node)
+            if rows is None:
+                continue
+            for dof, row in enumerate(rows, start=1):
+                if row.equations.size == 1 and row.coefficients[0] == 1.0:
+                    phi[row.equations[0]] = [ops.nodeEigenvector(node, j + 1, dof) for j in range(omega2.size)]
+        norms = np.sqrt(np.einsum("ij,ij->j", phi, mass @ phi))
+        shapes = self._opensees_shapes(ops, omega2.size) / norms
+        signs = sign_rule(shapes, phi / norms)
+        return omega2, shapes * signs, ops
+
+
+class ModeShapeOps:
+    """The ``ops`` module as a postprocess sees it after the scipy solution: every command is
+    OpenSees' except ``nodeEigenvector(node, mode[, dof])``, answered from the scipy modes."""
+
+    def __init__(self, ops, dof_map: DofMap, phi: np.ndarray):
+        self._ops = ops
+        self._dof_map = dof_map
+        self._phi = phi
+
+    def __getattr__(self, name: str):
+        return getattr(self._ops, name)
+
+    def nodeEigenvector(self, node: int, mode: int, dof: int | None = None):  # noqa: N802 - OpenSees' name
+        if not 1 <= mode <= self._phi.shape[1]:
+            raise ModelEvaluationError("postprocess_failed", f"nodeEigenvector: mode {mode} of {self._phi.shape[1]}")
+        rows = self._dof_map.node_rows(node)
+        if rows is None:
+            raise ModelEvaluationError(
+                "unmapped_constraint",
+                f"nodeEigenvector: node {node} is constrained by a multi-point constraint that was not recorded; "
+                "use an OpenSees solver flag",
+            )
+        q = self._phi[:, mode - 1]
+        if dof is not None:
+            return float(rows[dof - 1].of(q))
+        return [float(row.of(q)) for row in rows]
 
 
 _checked_commands: dict[str, Callable] = {}
