@@ -210,6 +210,19 @@ def test_too_many_modes_is_a_failure_with_a_reason():
         dataclasses.replace(model, n_modes=3, solver="scipy").modal({})
 
 
+def test_sparse_shift_invert_path_agrees_with_the_dense_path(monkeypatch):
+    from framework.models import eigen_solve
+
+    model, theta = _lab_frame()
+    model = dataclasses.replace(model, solver="scipy")
+    dense = model.modal(theta)
+    monkeypatch.setattr(eigen_solve, "DENSE_LIMIT", 10)  # 318 equations, 3 of 159 massive modes: shift-invert
+    sparse = model.modal(theta)
+    _assert_agree(sparse, dense)
+    again = model.modal(theta)
+    assert np.array_equal(sparse.frequencies_hz, again.frequencies_hz) and np.array_equal(sparse.shapes, again.shapes)
+
+
 # ---- history independence ------------------------------------------------------------------
 _HISTORY_SCRIPT = """
 import sys

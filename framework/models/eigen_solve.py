@@ -2,8 +2,9 @@
 
 - up to :data:`DENSE_LIMIT` equations (dense, :func:`condensed_modes`): exact
   static condensation of the massless DOFs s (zero rows of M),
-  K_c = K_mm - K_ms K_ss^-1 K_sm, phi_s = -K_ss^-1 K_sm phi_m, then the LARGEST eigenvalues
-  mu = 1 / omega^2 of (U^-T M_mm U^-1) y = mu y with K_c = U' U (Cholesky), phi_m = U^-1 y
+  K_c = K_mm - K_ms K_ss^-1 K_sm, phi_s = -K_ss^-1 K_sm phi_m (both from one Cholesky
+  factorization of K with the massless DOFs first), then the LARGEST eigenvalues
+  mu = 1 / omega^2 of (U_mm^-T M_mm U_mm^-1) y = mu y with K_c = U_mm' U_mm, phi_m = U_mm^-1 y
   (dense LAPACK eigh, subset by index); M_mm may be singular (e.g. a point mass on a rigid
   link gives its master rotations a mass block of rank 2);
 - above, when few modes are asked (2 k + 1 < DOFs with mass and k < 10 % of them):
@@ -16,17 +17,17 @@ smallest eigenvalues of M^-1/2 K_c M^-1/2 with an absolute error ~eps x its norm
 relative error eps x omega_max^2 / omega_1^2; with stiff springs and light nodes (the
 detailed lab frame: ~1e8) that is 2e-9 in omega_1^2, and it needs M_mm positive definite.
 The largest eigenvalues mu carry a relative error ~eps instead; measured against an
-extended-precision Rayleigh-quotient iteration on the lab frame (omega_1^2): 2e-10 (this
-module), 4e-11 (shift-invert), 4e-10 (OpenSees' -fullGenLapack).
+extended-precision Rayleigh-quotient iteration on the lab frame (omega_1^2): 3e-11 (this
+module), 4e-11 (shift-invert), 4e-10 (OpenSees' -fullGenLapack), 2e-9 (eigh(K_c, M_mm)).
 
 Both paths run with BLAS limited to one thread, so equal matrices give bit-identical modes
 in any process, whatever ran before (unlike ARPACK started from its internal random
 vector). Shapes are mass-normalized, phi' M phi = 1; :func:`sign_rule` fixes each mode's sign.
 Failures: a mechanism (K singular, e.g. an unsupported structure) has rigid-body
 eigenvalues at round-off level, ~1e-16 of max_i(K_ii / M_ii) over the DOFs with mass; any
-|omega_1^2| <= :data:`MECHANISM_RTOL` x that scale is "singular_matrix", a lower one
-"indefinite_matrix" (a buckled or unstable state), whether the Cholesky factorization of
-K_c failed or passed on round-off pivots.
+|omega_1^2| <= :data:`MECHANISM_RTOL` x that scale is "singular_matrix" (also a singular
+stiffness of the massless DOFs), a lower one "indefinite_matrix" (a buckled or unstable
+state), whether the Cholesky factorization of K failed or passed on round-off pivots.
 """
 
 from __future__ import annotations
@@ -100,40 +101,31 @@ def lowest_modes(stiffness: np.ndarray, mass: np.ndarray, n_modes: int) -> tuple
 def condensed_modes(k: np.ndarray, m: np.ndarray, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
     """Lowest modes by condensation of the massless DOFs and the inverse problem M_mm phi = mu K_c phi (dense).
 
-    k symmetric (n, n), m (n, n) with zero rows at massless DOFs. Returns (omega^2 ascending,
-    phi (n, n_modes)); see the module docstring for the equations.
+    k symmetric (n, n), m (n, n) with zero rows at massless DOFs. One Cholesky factorization
+    of K with the massless DOFs s first, K = U' U, U = [[U_ss, U_sm], [0, U_mm]], gives
+    K_c = U_mm' U_mm and K_ss^-1 K_sm = U_ss^-1 U_sm. Returns (omega^2 ascending, phi (n, n_modes)).
     """
     massive = np.any(m != 0.0, axis=1)
     mi, si = np.flatnonzero(massive), np.flatnonzero(~massive)
-    if si.size:
-        k_sm = k[np.ix_(si, mi)]
-        try:
-            factor = sla.cho_factor(k[np.ix_(si, si)], check_finite=False)
-        except np.linalg.LinAlgError as exc:
-            raise ModelEvaluationError("singular_matrix", f"stiffness of the massless DOFs: {exc}") from exc
-        t = sla.cho_solve(factor, k_sm, check_finite=False)
-        k_c = k[np.ix_(mi, mi)] - k_sm.T @ t
-    else:
-        t = np.zeros((0, mi.size))
-        k_c = k[np.ix_(mi, mi)]
-    k_c = 0.5 * (k_c + k_c.T)
-    m_mm = m[np.ix_(mi, mi)]
+    ns = si.size
+    order = np.concatenate([si, mi])
     try:
-        upper = sla.cholesky(k_c, lower=False, check_finite=False)  # K_c = U' U
-    except np.linalg.LinAlgError as exc:
-        raise _not_positive_definite(k_c, m_mm, _omega2_scale(k[np.ix_(mi, mi)], m_mm)) from exc
-    # A = U^-T M_mm U^-1: the eigenvalues of A y = mu y are mu = 1 / omega^2, phi_m = U^-1 y
-    x = sla.solve_triangular(upper, m_mm, trans="T", check_finite=False)
-    a = sla.solve_triangular(upper, x.T, trans="T", check_finite=False)
+        upper = sla.cholesky(k[np.ix_(order, order)], lower=False, check_finite=False)
+    except np.linalg.LinAlgError:
+        raise _not_positive_definite(k, si, mi, m[np.ix_(mi, mi)]) from None
+    u_mm = upper[ns:, ns:]
+    # A = U_mm^-T M_mm U_mm^-1: the eigenvalues of A y = mu y are mu = 1 / omega^2, phi_m = U_mm^-1 y
+    x = sla.solve_triangular(u_mm, m[np.ix_(mi, mi)], trans="T", check_finite=False)
+    a = sla.solve_triangular(u_mm, x.T, trans="T", check_finite=False)
     a = 0.5 * (a + a.T)
     mu, y = sla.eigh(a, subset_by_index=[mi.size - n_modes, mi.size - 1], check_finite=False)
     mu, y = mu[::-1], y[:, ::-1]
     if not mu[-1] > mi.size * np.finfo(float).eps * mu[0]:
         raise ModelEvaluationError("too_few_modes", f"the mass matrix has rank < n_modes={n_modes}")
-    phi_m = sla.solve_triangular(upper, y, check_finite=False)
+    phi_m = sla.solve_triangular(u_mm, y, check_finite=False)
     phi = np.empty((k.shape[0], n_modes))
     phi[mi] = phi_m
-    phi[si] = -t @ phi_m
+    phi[si] = -sla.solve_triangular(upper[:ns, :ns], upper[:ns, ns:] @ phi_m, check_finite=False)
     return 1.0 / mu, phi
 
 
@@ -145,13 +137,23 @@ def _omega2_scale(k_mm: np.ndarray, m_mm: np.ndarray) -> float:
         return float(np.max(np.where(diag_m > 0.0, np.diag(k_mm) / diag_m, 0.0), initial=0.0))
 
 
-def _not_positive_definite(k_c: np.ndarray, m_mm: np.ndarray, scale: float) -> ModelEvaluationError:
-    """The error for a condensed stiffness that failed Cholesky: its lowest eigenvalue decides
-    between a mechanism (|omega^2| at round-off level: "singular_matrix") and "indefinite_matrix"."""
+def _not_positive_definite(k: np.ndarray, si: np.ndarray, mi: np.ndarray, m_mm: np.ndarray) -> ModelEvaluationError:
+    """The error for a stiffness that failed Cholesky: "singular_matrix" if its massless block does
+    or the condensed K_c has a round-off-level lowest eigenvalue (a mechanism), else "indefinite_matrix"."""
+    scale = _omega2_scale(k[np.ix_(mi, mi)], m_mm)
+    k_c = k[np.ix_(mi, mi)]
+    if si.size:
+        k_sm = k[np.ix_(si, mi)]
+        try:
+            factor = sla.cho_factor(k[np.ix_(si, si)], check_finite=False)
+        except np.linalg.LinAlgError as exc:
+            return ModelEvaluationError("singular_matrix", f"stiffness of the massless DOFs: {exc}")
+        k_c = k_c - k_sm.T @ sla.cho_solve(factor, k_sm, check_finite=False)
     try:
-        lowest = float(sla.eigh(k_c, m_mm, eigvals_only=True, subset_by_index=[0, 0], check_finite=False)[0])
+        lowest = float(sla.eigh(0.5 * (k_c + k_c.T), m_mm, eigvals_only=True, subset_by_index=[0, 0],
+                                check_finite=False)[0])
     except (np.linalg.LinAlgError, ValueError) as exc:
-        return ModelEvaluationError("eigen_failed", f"condensed stiffness not positive definite: {exc}")
+        return ModelEvaluationError("eigen_failed", f"stiffness not positive definite: {exc}")
     if lowest < -MECHANISM_RTOL * scale:
         return ModelEvaluationError("indefinite_matrix", f"negative eigenvalue {lowest:.4g}")
     return ModelEvaluationError("singular_matrix", f"mechanism: lowest omega^2 {lowest:.3g} (scale {scale:.3g})")
