@@ -3,7 +3,9 @@
 Usage: .venv/bin/python benchmarks/bench_opensees_eigen.py [--points 20] [--seed 0] [--bridge]
 
 For the detailed lab frame (old default: OpenSees' -genBandArpack; also -fullGenLapack, the
-deterministic OpenSees solver) and the beam's OpenSees backend (old: -fullGenLapack), and with
+deterministic OpenSees solver; and "scipy+linear", the new solver with the six bracket springs
+declared as linear_parameters) and the beam's OpenSees backend (old: -fullGenLapack; also
+"scipy+linear" with its element stiffness ratios declared linear), and with
 --bridge the bridge's plain path (old: OpenSees' default ARPACK), evaluates the same random
 points of the parameter box with every solver, interleaved, and prints the median wall time
 per evaluation (build, analysis and eigen solution included), the ratio to the new solver,
@@ -31,14 +33,16 @@ from framework.errors import ModelEvaluationError  # noqa: E402
 def _structures(bridge: bool) -> dict:
     from framework.models import beam, lab_frame_detailed
 
+    lab = lab_frame_detailed.make_model()
+    beam_model = beam.make_opensees_model()
     out = {
-        "lab_frame_detailed": (lab_frame_detailed.make_model(), ("-genBandArpack", "-fullGenLapack")),
-        "beam_opensees": (beam.make_opensees_model(), ("-fullGenLapack",)),
+        "lab_frame_detailed": (lab, ("-genBandArpack", "-fullGenLapack"), tuple(lab.parameters.names)),
+        "beam_opensees": (beam_model, ("-fullGenLapack",), tuple(beam_model.parameters.names)),
     }
     if bridge:
         from framework.models.bridge import make_model
 
-        out["bridge_plain"] = (make_model(fast=False), ("",))
+        out["bridge_plain"] = (make_model(fast=False), ("",), ())
     return out
 
 
@@ -46,15 +50,25 @@ def _mac_diagonal(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return (np.sum(a * b, axis=0) ** 2) / (np.sum(a * a, axis=0) * np.sum(b * b, axis=0))
 
 
-def bench(model, old_solvers, n_points: int, seed: int) -> list[dict]:
-    """Median ms per evaluation of each solver on the same points, and differences to 'scipy'."""
+def bench(model, old_solvers, n_points: int, seed: int, linear: tuple[str, ...] = ()) -> list[dict]:
+    """Median ms per evaluation of each solver on the same points, and differences to 'scipy'.
+
+    With ``linear`` also "scipy+linear": solver 'scipy' with these linear_parameters (operators
+    extracted during the warm-up, reported separately as setup_ms).
+    """
     models = {s: dataclasses.replace(model, solver=s) for s in ("scipy", *old_solvers)}
+    if linear:
+        models["scipy+linear"] = dataclasses.replace(model, solver="scipy", linear_parameters=linear)
+        old_solvers = ("scipy+linear", *old_solvers)
     rng = np.random.default_rng(seed)
     lower = np.array([p.lower for p in model.parameters])
     upper = np.array([p.upper for p in model.parameters])
     points = [{}] + [dict(zip(model.parameters.names, rng.uniform(lower, upper))) for _ in range(n_points - 1)]
-    for m in models.values():
-        m.modal({})  # warm-up
+    setup = {}
+    for s, m in models.items():
+        t0 = time.perf_counter()
+        m.modal({})  # warm-up (and the extraction of the linear operators)
+        setup[s] = time.perf_counter() - t0
     times = {s: [] for s in models}
     failed = {s: 0 for s in models}
     df = {s: 0.0 for s in old_solvers}
@@ -83,7 +97,7 @@ def bench(model, old_solvers, n_points: int, seed: int) -> list[dict]:
     for s in old_solvers:
         t = statistics.median(times[s])
         rows.append({"solver": s or "(OpenSees default)", "ms": 1e3 * t, "ratio": t / t_new, "df": df[s],
-                     "dmac": dmac[s], "failed": failed[s]})
+                     "dmac": dmac[s], "failed": failed[s], "setup_ms": 1e3 * setup[s]})
     return rows
 
 
@@ -94,13 +108,14 @@ def main(argv=None) -> dict:
     parser.add_argument("--bridge", action="store_true", help="also the bridge's plain path (~0.5 s per evaluation)")
     args = parser.parse_args(argv)
     out = {}
-    for name, (model, old) in _structures(args.bridge).items():
-        rows = bench(model, old, args.points, args.seed)
+    for name, (model, old, linear) in _structures(args.bridge).items():
+        rows = bench(model, old, args.points, args.seed, linear)
         out[name] = rows
         print(f"{name} ({args.points} points, median per evaluation)")
         for r in rows:
             print(f"  {r['solver']:<20s} {r['ms']:8.2f} ms  x{r['ratio']:5.2f} of scipy   "
-                  f"max |df/f| {r['df']:.1e}   max 1-MAC {r['dmac']:.1e}   failed {r['failed']}")
+                  f"max |df/f| {r['df']:.1e}   max 1-MAC {r['dmac']:.1e}   failed {r['failed']}"
+                  + (f"   (operators {r['setup_ms']:.0f} ms once)" if r["solver"] == "scipy+linear" else ""))
     return out
 
 

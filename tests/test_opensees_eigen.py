@@ -5,6 +5,7 @@ that do not depend on what the process evaluated before."""
 import dataclasses
 import functools
 import logging
+import pickle
 import runpy
 import subprocess
 import sys
@@ -288,3 +289,73 @@ def test_lab_frame_detailed_study_gives_identical_tables_serially_and_on_process
         pd.testing.assert_frame_equal(a, b, check_exact=True, obj=table)
     runs = pd.read_parquet(serial / "runs.parquet")
     assert len(runs) == 3 and (runs["n_failed_evaluations"] == 0).all() and (runs["status"] != "failed").all()
+
+
+# ---- stiffness linear in declared parameters -------------------------------------------------
+CHAIN = ParameterSet([
+    Parameter("k1_n_per_m", 2.0e6, 1.0e6, 4.0e6, "N/m", "storey 1 stiffness"),
+    Parameter("k2_n_per_m", 1.5e6, 0.5e6, 3.0e6, "N/m", "storey 2 stiffness"),
+    Parameter("m2_kg", 800.0, 600.0, 1000.0, "kg", "floor 2 mass"),
+])
+
+
+def _chain(v, square_k2=False):
+    ops.model("basic", "-ndm", 1, "-ndf", 1)
+    for tag in (0, 1, 2):
+        ops.node(tag, 0.0)
+    ops.fix(0, 1)
+    ops.uniaxialMaterial("Elastic", 1, v["k1_n_per_m"])
+    ops.uniaxialMaterial("Elastic", 2, v["k2_n_per_m"] ** 2 / 1.5e6 if square_k2 else v["k2_n_per_m"])
+    ops.element("zeroLength", 1, 0, 1, "-mat", 1, "-dir", 1)
+    ops.element("zeroLength", 2, 1, 2, "-mat", 2, "-dir", 1)
+    ops.mass(1, 1000.0)
+    ops.mass(2, v["m2_kg"])
+
+
+def _chain_square(v):
+    return _chain(v, square_k2=True)
+
+
+def _chain_model(build=_chain, linear=("k1_n_per_m", "k2_n_per_m")):
+    return OpenSeesModel(build, CHAIN, {"floor1": (1, 1), "floor2": (2, 1)}, n_modes=2, linear_parameters=linear)
+
+
+def test_linear_parameters_give_the_modes_of_a_build_per_evaluation():
+    model, theta = _lab_frame()
+    names = tuple(model.parameters.names)  # the six bracket springs: zeroLength elastic stiffnesses
+    direct = dataclasses.replace(model, solver="scipy")
+    linear = dataclasses.replace(model, solver="scipy", linear_parameters=names)
+    _assert_agree(linear.modal(theta), direct.modal(theta))
+    _assert_agree(linear.modal({"k_u3": 1.0e7, "k_r1": 500.0}), direct.modal({"k_u3": 1.0e7, "k_r1": 500.0}))
+    assert "_linear" in linear.__dict__
+    fresh = pickle.loads(pickle.dumps(linear))  # operators are not shipped to workers ...
+    assert "_linear" not in fresh.__dict__
+    a, b = fresh.modal(theta), linear.modal(theta)  # ... and extracted again to the same bits
+    assert a.frequencies_hz.tobytes() == b.frequencies_hz.tobytes() and a.shapes.tobytes() == b.shapes.tobytes()
+
+
+def test_linear_parameters_fall_back_to_a_build_when_another_parameter_changes():
+    linear, direct = _chain_model(), OpenSeesModel(_chain, CHAIN, {"floor1": (1, 1), "floor2": (2, 1)}, n_modes=2)
+    theta = {"k1_n_per_m": 2.5e6, "m2_kg": 900.0}
+    a, b = linear.modal(theta), direct.modal(theta)
+    assert a.frequencies_hz.tobytes() == b.frequencies_hz.tobytes()  # built: the same computation
+    np.testing.assert_allclose(linear.modal({"k2_n_per_m": 1.0e6}).frequencies_hz,
+                               direct.modal({"k2_n_per_m": 1.0e6}).frequencies_hz, rtol=1e-12)
+
+
+@pytest.mark.parametrize("build, linear, message", [
+    (_chain, ("k2_n_per_m", "m2_kg"), "nonlinear_parameter: m2_kg changes the mass matrix"),
+    (_chain_square, ("k1_n_per_m", "k2_n_per_m"), r"nonlinear_parameter: the stiffness is not linear in"),
+])
+def test_a_wrong_linear_declaration_fails_every_evaluation_relying_on_it(build, linear, message):
+    model = _chain_model(build, linear)
+    for _ in range(2):
+        with pytest.raises(ModelEvaluationError, match=message):
+            model.modal({"k2_n_per_m": 1.0e6})
+
+
+def test_linear_parameters_are_checked_at_construction():
+    with pytest.raises(ValueError, match=r"linear_parameters: unknown parameter\(s\) \['k3'\]"):
+        _chain_model(linear=("k3",))
+    with pytest.raises(ValueError, match="linear_parameters needs solver 'scipy'"):
+        dataclasses.replace(_chain_model(), solver="-fullGenLapack")

@@ -83,14 +83,14 @@ def lowest_modes(stiffness: np.ndarray, mass: np.ndarray, n_modes: int) -> tuple
     n_mass = int(massive.sum())
     if n_modes > n_mass:
         raise ModelEvaluationError("too_few_modes", f"n_modes={n_modes} > {n_mass} DOFs with mass")
-    k = 0.5 * (k + k.T)  # OpenSees' assembled tangent is symmetric up to round-off
     with single_thread_blas():
         if n > DENSE_LIMIT and max(2 * n_modes + 1, 20) < n_mass and n_modes < 0.1 * n_mass:
-            omega2, phi = solve_shift_invert(sp.csc_matrix(k), sp.csc_matrix(m), n_modes)
+            k_sym = 0.5 * (k + k.T)  # OpenSees' assembled tangent is symmetric up to round-off
+            omega2, phi = solve_shift_invert(sp.csc_matrix(k_sym), sp.csc_matrix(m), n_modes)
         else:
-            omega2, phi = condensed_modes(k, m, n_modes)
+            omega2, phi = condensed_modes(k, m, n_modes)  # reads the upper triangle of K only
         phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, m @ phi))
-    scale = _omega2_scale(k[np.ix_(massive, massive)], m[np.ix_(massive, massive)])
+    scale = _omega2_scale(np.diag(k)[massive], np.diag(m)[massive])
     if omega2[0] <= MECHANISM_RTOL * scale:
         raise ModelEvaluationError(
             "singular_matrix", f"mechanism: lowest omega^2 {omega2[0]:.3g} <= {MECHANISM_RTOL:g} x {scale:.3g}"
@@ -101,8 +101,9 @@ def lowest_modes(stiffness: np.ndarray, mass: np.ndarray, n_modes: int) -> tuple
 def condensed_modes(k: np.ndarray, m: np.ndarray, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
     """Lowest modes by condensation of the massless DOFs and the inverse problem M_mm phi = mu K_c phi (dense).
 
-    k symmetric (n, n), m (n, n) with zero rows at massless DOFs. One Cholesky factorization
-    of K with the massless DOFs s first, K = U' U, U = [[U_ss, U_sm], [0, U_mm]], gives
+    k (n, n) symmetric (up to round-off: one triangle is read), m (n, n) with zero rows at
+    massless DOFs. One Cholesky factorization of K with the massless DOFs s first,
+    K = U' U, U = [[U_ss, U_sm], [0, U_mm]], gives
     K_c = U_mm' U_mm and K_ss^-1 K_sm = U_ss^-1 U_sm. Returns (omega^2 ascending, phi (n, n_modes)).
     """
     massive = np.any(m != 0.0, axis=1)
@@ -129,18 +130,17 @@ def condensed_modes(k: np.ndarray, m: np.ndarray, n_modes: int) -> tuple[np.ndar
     return 1.0 / mu, phi
 
 
-def _omega2_scale(k_mm: np.ndarray, m_mm: np.ndarray) -> float:
+def _omega2_scale(diag_k: np.ndarray, diag_m: np.ndarray) -> float:
     """max_i K_ii / M_ii over DOFs with a positive diagonal mass (an estimate of omega_max^2; K before
     condensation: a mechanism's condensed stiffness is zero up to round-off)."""
-    diag_m = np.diag(m_mm)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return float(np.max(np.where(diag_m > 0.0, np.diag(k_mm) / diag_m, 0.0), initial=0.0))
+        return float(np.max(np.where(diag_m > 0.0, diag_k / diag_m, 0.0), initial=0.0))
 
 
 def _not_positive_definite(k: np.ndarray, si: np.ndarray, mi: np.ndarray, m_mm: np.ndarray) -> ModelEvaluationError:
     """The error for a stiffness that failed Cholesky: "singular_matrix" if its massless block does
     or the condensed K_c has a round-off-level lowest eigenvalue (a mechanism), else "indefinite_matrix"."""
-    scale = _omega2_scale(k[np.ix_(mi, mi)], m_mm)
+    scale = _omega2_scale(np.diag(k)[mi], np.diag(m_mm))
     k_c = k[np.ix_(mi, mi)]
     if si.size:
         k_sm = k[np.ix_(si, mi)]

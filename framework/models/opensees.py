@@ -53,7 +53,8 @@ import numpy as np
 from framework.errors import MissingDependencyError, ModelEvaluationError
 from framework.models.base import ModalResult, full_theta
 from framework.models.eigen_solve import lowest_modes, sign_rule
-from framework.models.opensees_matrices import DofMap, recording_constraints, stiffness_and_mass
+from framework.models.opensees_linear import LinearOperators, extract_linear_operators
+from framework.models.opensees_matrices import DofMap, DofRow, recording_constraints, stiffness_and_mass
 from framework.parameters import ParameterSet
 
 log = logging.getLogger(__name__)
@@ -115,7 +116,10 @@ class OpenSeesModel:
     optional ``postprocess(result, info, ops) -> ModalResult`` called while the domain is
     alive (e.g. to classify modes by kinetic energy); ``info`` is what build returned.
     dof_scale: optional {label: factor} applied to the shape rows (e.g. b/2 for a
-    rotation compared with translations).
+    rotation compared with translations). linear_parameters: parameters on which the
+    stiffness depends linearly and the mass not at all (solver "scipy", no gravity, no
+    postprocess): matrices extracted once per process, no build for evaluations that change
+    only these (:mod:`framework.models.opensees_linear`).
     """
 
     build: Callable[[dict[str, float]], Any]
@@ -128,6 +132,7 @@ class OpenSeesModel:
     postprocess: Callable[[ModalResult, Any, Any], ModalResult] | None = None
     dof_scale: Mapping[str, float] = field(default_factory=dict)
     name: str = "opensees"
+    linear_parameters: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not callable(self.build):
@@ -148,26 +153,33 @@ class OpenSeesModel:
                 direction = DIRECTIONS[direction]
             resolved[str(label)] = (int(node), int(direction))
         object.__setattr__(self, "measured_dofs", resolved)
+        object.__setattr__(self, "linear_parameters", tuple(str(n) for n in self.linear_parameters))
+        unknown = [n for n in self.linear_parameters if n not in self.parameters.names]
+        if unknown:
+            raise ValueError(f"linear_parameters: unknown parameter(s) {unknown}; known: {self.parameters.names}")
+        if self.linear_parameters and (self.solver != SCIPY_SOLVER or self.gravity is not None or self.postprocess):
+            raise ValueError("linear_parameters needs solver 'scipy', no gravity analysis and no postprocess")
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state.pop("_linear", None)  # operators are extracted again in each process
+        return state
 
     @property
     def dofs(self) -> tuple[str, ...]:
         return tuple(self.measured_dofs)
 
     def modal(self, theta: Mapping[str, float]) -> ModalResult:
-        ops = ops_module()
         values: dict[str, Any] = dict(self.fixed)
         values.update(full_theta(self.parameters, theta))
-        ops.wipe()
+        if self.linear_parameters:
+            operators = self._linear_operators()
+            if operators.covers(values):
+                omega2, shapes, _ = self._solve(operators.stiffness(values), operators.mass, operators.rows)
+                return self._result(omega2, shapes)
+        ops = ops_module()
         try:
-            try:
-                with finite_arguments(ops), recording_constraints(ops) as constraints:
-                    info = self.build(values)
-            except ModelEvaluationError:
-                raise
-            except SystemExit as exc:  # sys.exit() in a build must not end the study
-                raise ModelEvaluationError("model_exit", f"the build function called sys.exit({exc.code!r})") from exc
-            except Exception as exc:  # a user's build function can raise anything
-                raise ModelEvaluationError("build_failed", f"{type(exc).__name__}: {exc}") from exc
+            info, constraints = self._build_domain(ops, values)
             if self.gravity is not None:
                 run_static(ops, self.gravity)
             if self.solver == SCIPY_SOLVER:
@@ -176,13 +188,72 @@ class OpenSeesModel:
                 omega2 = eigen(ops, self.n_modes, self.solver)
                 shapes = self._opensees_shapes(ops, omega2.size)
                 view = ops
-            freqs = np.sqrt(np.maximum(omega2, 0.0)) / (2.0 * math.pi)
-            result = ModalResult(freqs, shapes, self.dofs, meta={"omega2": omega2})
+            result = self._result(omega2, shapes)
             if self.postprocess is not None:
                 result = self.postprocess(result, info, view)
             return result
         finally:
             ops.wipe()
+
+    def _result(self, omega2: np.ndarray, shapes: np.ndarray) -> ModalResult:
+        freqs = np.sqrt(np.maximum(omega2, 0.0)) / (2.0 * math.pi)
+        return ModalResult(freqs, shapes, self.dofs, meta={"omega2": omega2})
+
+    def _build_domain(self, ops, values: dict[str, Any]) -> tuple[Any, list]:
+        """Wipe the domain and run the build; (what build returned, recorded MP constraints)."""
+        ops.wipe()
+        try:
+            with finite_arguments(ops), recording_constraints(ops) as constraints:
+                info = self.build(values)
+        except ModelEvaluationError:
+            raise
+        except SystemExit as exc:  # sys.exit() in a build must not end the study
+            raise ModelEvaluationError("model_exit", f"the build function called sys.exit({exc.code!r})") from exc
+        except Exception as exc:  # a user's build function can raise anything
+            raise ModelEvaluationError("build_failed", f"{type(exc).__name__}: {exc}") from exc
+        return info, constraints
+
+    def _linear_operators(self) -> LinearOperators:
+        """Operators of :mod:`framework.models.opensees_linear`, extracted on first use in a process."""
+        cached = self.__dict__.get("_linear")
+        if cached is None:
+            base: dict[str, Any] = dict(self.fixed)
+            base.update(full_theta(self.parameters, {}))
+            steps = {}
+            for p in self.parameters:
+                if p.name in self.linear_parameters:
+                    steps[p.name] = abs(float(base[p.name])) or float(p.upper - p.lower)
+            try:
+                cached = extract_linear_operators(self._extract_at, base, self.linear_parameters, steps)
+            except ModelEvaluationError as exc:
+                cached = exc  # every evaluation relying on it fails the same way, without re-extracting
+            object.__setattr__(self, "_linear", cached)
+        if isinstance(cached, ModelEvaluationError):
+            raise ModelEvaluationError(cached.reason, cached.detail)
+        return cached
+
+    def _extract_at(self, values: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, list[DofRow]]:
+        """(K, M, rows of the measured DOFs) of the model built at ``values``."""
+        ops = ops_module()
+        try:
+            _, constraints = self._build_domain(ops, values)
+            stiffness, mass = stiffness_and_mass(ops)
+            dof_map = DofMap(ops, constraints)
+            rows = [dof_map.row(node, direction) for node, direction in self.measured_dofs.values()]
+        finally:
+            ops.wipe()
+        if any(row is None for row in rows):
+            raise ModelEvaluationError(
+                "unmapped_constraint", "a measured DOF lies on a node with an unrecorded multi-point constraint"
+            )
+        return stiffness, mass, rows
+
+    def _solve(self, stiffness: np.ndarray, mass: np.ndarray, rows) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(omega^2, measured shapes, equation-space shapes): mass-normalized, largest measured component > 0."""
+        omega2, phi = lowest_modes(stiffness, mass, self.n_modes)
+        shapes = np.array([row.of(phi) for row in rows]).reshape(len(rows), -1) * self._scale()[:, None]
+        signs = sign_rule(shapes, phi)
+        return omega2, shapes * signs, phi * signs
 
     def _scale(self) -> np.ndarray:
         return np.array([float(self.dof_scale.get(label, 1.0)) for label in self.measured_dofs])
@@ -205,11 +276,8 @@ class OpenSeesModel:
         rows = [dof_map.row(node, direction) for node, direction in self.measured_dofs.values()]
         if any(row is None for row in rows):
             return self._fallback_modes(ops, dof_map, mass)
-        omega2, phi = lowest_modes(stiffness, mass, self.n_modes)
-        shapes = np.array([row.of(phi) for row in rows]).reshape(len(rows), -1) * self._scale()[:, None]
-        signs = sign_rule(shapes, phi)
-        phi = phi * signs
-        return omega2, shapes * signs, ModeShapeOps(ops, dof_map, phi)
+        omega2, shapes, phi = self._solve(stiffness, mass, rows)
+        return omega2, shapes, ModeShapeOps(ops, dof_map, phi)
 
     def _fallback_modes(self, ops, dof_map: DofMap, mass: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any]:
         """OpenSees' deterministic full LAPACK solver, normalized as :meth:`_scipy_modes`."""
