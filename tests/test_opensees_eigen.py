@@ -205,6 +205,14 @@ def test_shapes_are_mass_normalized_with_the_largest_measured_component_positive
         assert s[np.argmax(np.abs(s[:, j])), j] > 0.0
 
 
+@pytest.mark.parametrize("dofs, message", [({"a": (7, 1)}, "bad_dof: the model has no node 7"),
+                                           ({"a": (2, 2)}, "bad_dof: node 2 has DOFs 1..1, not 2")])
+def test_a_measured_dof_the_model_lacks_is_a_failure_with_a_reason(dofs, message):
+    model, _ = _own_model()
+    with pytest.raises(ModelEvaluationError, match=message):
+        dataclasses.replace(model, measured_dofs=dofs, solver="scipy").modal({})
+
+
 def test_too_many_modes_is_a_failure_with_a_reason():
     model, _ = _own_model()
     with pytest.raises(ModelEvaluationError, match="too_few_modes: n_modes=3 > 2 DOFs with mass"):

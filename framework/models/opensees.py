@@ -16,9 +16,16 @@ Eigen solvers (``solver``):
   and dense eigh up to ``eigen_solve.DENSE_LIMIT`` equations, shift-invert Lanczos with a
   fixed start vector above). The modes are a deterministic, bit-reproducible function of
   theta in any process and whatever ran before; shapes are mass-normalized (phi' M phi = 1,
-  kg^-1/2 for translations) with the largest-magnitude measured component positive. The
-  extraction costs O(n^2) memory and time per evaluation for n equations (two dense n x n
-  matrices: ~0.8 MB each at n = 318, the detailed lab frame; 3 MB at n = 624, the bridge).
+  kg^-1/2 for translations) with the largest-magnitude measured component positive.
+  Frequencies agree with OpenSees' solvers to ~1e-10 (the lowest eigenvalue of a frame with
+  stiff springs and light nodes is only determined to ~1e-10 in double precision; this
+  solver is the more accurate, see :mod:`framework.models.eigen_solve`). The extraction
+  costs O(n^2) memory and time per evaluation for n equations (two dense n x n matrices:
+  0.8 MB each at n = 318, the detailed lab frame; 3 MB at n = 624, the bridge): ~5x the time
+  of OpenSees' ARPACK for the detailed lab frame, about the same for the bridge's plain path
+  (benchmarks/bench_opensees_eigen.py). ``linear_parameters`` removes it for parameters on
+  which the stiffness depends linearly (:mod:`framework.models.opensees_linear`: matrices
+  extracted once per process, no build per evaluation; ~1.3x ARPACK for the lab frame).
   Measured DOFs on nodes constrained by ``equalDOF``, ``rigidLink`` or ``rigidDiaphragm``
   are recovered from the retained node; for a measured DOF on a node constrained otherwise
   (``equalDOF_Mixed``, ``equationConstraint``, or a command imported by name, which the
@@ -30,7 +37,8 @@ Eigen solvers (``solver``):
   or ``""`` for OpenSees' default): OpenSees solves, shapes as OpenSees returns them.
   ARPACK (``-genBandArpack``, the default of ``ops.eigen``) starts from a random vector whose
   generator state persists in the process, so its results differ at ~1e-15 with the history
-  of the process; ``-fullGenLapack`` is deterministic but ~25x slower.
+  of the process; ``-fullGenLapack`` is deterministic but ~25x slower (and reports complex
+  eigenvalues for the detailed lab frame at some points of its parameter box).
 
 The build function must be importable at module level (for process and Dask workers).
 A build that crashes the process (a segfault in native code, an abort after a NaN reached

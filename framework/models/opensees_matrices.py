@@ -192,17 +192,22 @@ class DofMap:
         self._ops = ops
         self._ndm = int(np.ravel(ops.getNDM())[0])
         self._constrained = set(int(n) for n in ops.getConstrainedNodes())
+        self._nodes = set(int(n) for n in ops.getNodeTags())
         self._known = _parse_record(record)
         self._rows: dict[int, list[DofRow] | None] = {}
 
     def row(self, node: int, dof: int) -> DofRow | None:
         """Row of DOF ``dof`` (1-based, OpenSees' numbering) of ``node``; None if unmapped."""
         rows = self.node_rows(node)
+        if rows is not None and not 1 <= dof <= len(rows):
+            raise ModelEvaluationError("bad_dof", f"node {node} has DOFs 1..{len(rows)}, not {dof}")
         return None if rows is None else rows[dof - 1]
 
     def node_rows(self, node: int) -> list[DofRow] | None:
         node = int(node)
         if node not in self._rows:
+            if node not in self._nodes:
+                raise ModelEvaluationError("bad_dof", f"the model has no node {node}")
             self._rows[node] = self._compute(node)
         return self._rows[node]
 
