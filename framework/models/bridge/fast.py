@@ -8,8 +8,9 @@ exact for this model:
 
 - the stiffness of every element except the cables is linear in the updating ratios, so
   K_lin(theta) = K_0 + sum_p (theta_p - 1) K_p with K_0 and the K_p extracted once from
-  OpenSees (``printA`` of a ``FullGeneral`` system, Transformation constraints, unit
-  perturbations of K_y_deck, K_x_deck, K_t_deck, K_bearing);
+  OpenSees (:func:`~framework.models.opensees_matrices.static_stiffness`: ``printA`` of a
+  ``FullGeneral`` system, Transformation constraints; unit perturbations of K_y_deck,
+  K_x_deck, K_t_deck, K_bearing);
 - the cable chains' tangent is assembled per evaluation from the gravity state read from
   OpenSees, with the corotational truss tangent
   k_e = (E A / L_0) n n' + (N / L_n) (I - n n')  (n current unit vector, L_n current
@@ -34,7 +35,6 @@ checked by tests/test_bridge_fast.py and benchmarks/bench_bridge.py.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import logging
 import math
@@ -63,7 +63,9 @@ from framework.models.bridge.geometry import (
     deck_node,
 )
 from framework.models.bridge.modes import MODE_TYPES, keep_deck_modes, node_groups
+from framework.models.eigen_solve import single_thread_blas
 from framework.models.opensees import OpenSeesModel, ops_module, run_static
+from framework.models.opensees_matrices import static_stiffness
 
 log = logging.getLogger(__name__)
 
@@ -168,20 +170,6 @@ def _cable_matrix(b: sp.csr_matrix, k3: np.ndarray) -> sp.csr_matrix:
     return (b.T @ d @ b).tocsr()
 
 
-def _printa(ops) -> np.ndarray:
-    ops.system("FullGeneral")
-    ops.numberer("Plain")
-    ops.constraints("Transformation")
-    ops.algorithm("Linear")
-    ops.integrator("LoadControl", 0.0)
-    ops.analysis("Static")
-    if ops.analyze(1) != 0:
-        raise ModelEvaluationError("singular_matrix", "extraction step of the bridge stiffness failed")
-    a = np.asarray(ops.printA("-ret"), dtype=float)
-    n = int(round(math.sqrt(a.size)))
-    return a.reshape(n, n)
-
-
 def extract_operators(plain: OpenSeesModel) -> _Operators:
     """Extract K_0, K_p, M and the index maps from OpenSees (5 builds, once per model).
 
@@ -200,7 +188,7 @@ def extract_operators(plain: OpenSeesModel) -> _Operators:
         for values in variants:
             ops.wipe()
             info = plain.build(values)
-            a = _printa(ops)
+            a = static_stiffness(ops)
             eq_map = {n: tuple(ops.nodeDOFs(n)) for n in ops.getNodeTags()}
             if dofs_ref is None:
                 dofs_ref = eq_map
@@ -548,7 +536,7 @@ class BridgeFastModel:
         finally:
             ops.wipe()
         omega2_max = (2.0 * math.pi * self.f_max_hz) ** 2
-        with _single_thread_blas():
+        with single_thread_blas():
             if is_symmetric_state(k3, op):
                 omega2, phi = solve_irreps(values, k3, op, omega2_max)
             else:
@@ -560,27 +548,6 @@ class BridgeFastModel:
         shares = energy_shares_eq(phi, op)
         meta = {"omega2": omega2, "cable_tension_n": tension, "target_tension_n": dict(info.target_tension_n)}
         return keep_deck_modes(freqs, shapes, self.dofs, shares, self.deck_energy_min, meta)
-
-
-_CONTROLLER: list = []
-
-
-def _single_thread_blas():
-    """Context limiting BLAS to one thread (threadpoolctl, if installed).
-
-    The dense solves here are small (~400 DOFs); on a shared 2-core machine multi-threaded
-    OpenBLAS made them several times slower.
-    """
-    if not _CONTROLLER:
-        try:
-            from threadpoolctl import ThreadpoolController
-
-            _CONTROLLER.append(ThreadpoolController())
-        except ImportError:  # pragma: no cover - optional
-            _CONTROLLER.append(None)
-    if _CONTROLLER[0] is None:  # pragma: no cover
-        return contextlib.nullcontext()
-    return _CONTROLLER[0].limit(limits=1, user_api="blas")
 
 
 def solve_dense(k: np.ndarray, mass: np.ndarray, omega2_max: float):
