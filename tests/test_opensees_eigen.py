@@ -88,8 +88,8 @@ def test_scipy_solver_agrees_with_opensees_solvers(name):
     make, references = STRUCTURES[name]
     model, theta = make()
     new = dataclasses.replace(model, solver="scipy").modal(theta)
-    for flag in references:
-        ref = dataclasses.replace(model, solver=flag).modal(theta)
+    for flag in references:  # OpenSees' own solvers rebuild the model at every evaluation
+        ref = dataclasses.replace(model, solver=flag, linear_parameters=()).modal(theta)
         _assert_agree(new, ref)
         for key, values in ref.mode_info.items():  # the bridge's postprocess: energy shares, mode types
             if np.asarray(values).dtype.kind == "f":

@@ -176,7 +176,7 @@ def make_opensees_model(
         parameters=beam_parameters(n_elements, lower, upper),
         measured_dofs={label: (node + 1, 2) for label, node in zip(dof_labels(), nodes)},
         n_modes=n_modes,
-        solver="-fullGenLapack",
+        linear_parameters=tuple(ratio_names(n_elements)),
         name=f"beam{n_elements}_opensees",
     )
 

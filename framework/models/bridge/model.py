@@ -70,7 +70,7 @@ def make_model(
         measured_dofs=sensor_dofs(),
         n_modes=n_modes or N_MODES_PLAIN[cable_elements],
         gravity=GRAVITY,
-        solver="",
+        solver="scipy",
         postprocess=functools.partial(_postprocess, deck_energy_min=deck_energy_min, f_max_hz=f_max_hz),
         name=f"bridge_{cable_elements}el",
     )
