@@ -15,6 +15,15 @@ default; process pools and Dask in :mod:`framework.parallel`), passed per call: 
 model is evaluated is an execution detail, not part of the problem, which stays a plain,
 picklable description.
 
+``jacobian(x, runner=None)`` is the exact Jacobian dr/dx of the residual vector at one
+point when the model provides modal derivatives (``model.modal_derivatives``, see
+:mod:`framework.modal_derivatives`) and the formulation an exact Jacobian: the residual
+derivatives with respect to theta from the eigenvalue and eigenvector derivatives of the
+paired modes (pairing held fixed at the point: the residuals are piecewise smooth;
+unmatched modes give zero rows), the penalty terms' derivatives, and the chain rule
+dtheta/dx = upper - lower. Otherwise, or at a point with repeated or close eigenvalues
+(warned once per model), it is the forward-difference Jacobian.
+
 Problem transforms (two damage states at once, :func:`framework.damage.two_state`; the
 SNT derated objective, :func:`framework.optimizers.niching.derated`) follow the same
 protocol: ``parameters``, ``n_params``, ``n_objectives``, ``x_initial``,
@@ -32,6 +41,7 @@ import pandas as pd
 
 from framework.errors import InputError, ModelEvaluationError
 from framework.measurements import MeasuredModes
+from framework.modal_derivatives import CloseEigenvalues
 from framework.models.base import ModalResult, StructuralModel, modal_many
 from framework.objectives import (
     ModeCorrelation,
@@ -40,6 +50,7 @@ from framework.objectives import (
     correlation_table,
     get_formulation,
     n_penalty_residuals,
+    penalty_jacobian,
     penalty_residuals,
     use_shape_term,
 )
@@ -70,6 +81,8 @@ class Evaluations:
     details: list[str]
     correlations: list
     source: Evaluations | None = None
+    #: the model's ModalResult (or ModelEvaluationError) per point, when asked for (``keep_results``)
+    results: list | None = None
 
     def __len__(self) -> int:
         return len(self.objective)
@@ -159,8 +172,11 @@ class UpdatingProblem:
         return self.parameters.to_physical(x)
 
     # ---- evaluation ---------------------------------------------------------------------
-    def evaluate(self, X: np.ndarray, runner: Runner | None = None) -> Evaluations:
-        """Evaluate points X (n, k) in normalized coordinates (clipped to [0, 1]); pure."""
+    def evaluate(self, X: np.ndarray, runner: Runner | None = None, keep_results: bool = False) -> Evaluations:
+        """Evaluate points X (n, k) in normalized coordinates (clipped to [0, 1]); pure.
+
+        keep_results: also return the model's results (``Evaluations.results``), e.g. to
+        differentiate at the point without solving it again."""
         X = as_points(X, self.n_params)
         theta = self.parameters.to_physical(X)
         thetas = [self.parameters.as_dict(t) for t in theta]
@@ -203,7 +219,8 @@ class UpdatingProblem:
         F = self.formulation.split(residuals[:, : self.n_modal_residuals], self.measured, self.spec)
         F = F + np.sum(residuals[:, self.n_modal_residuals :] ** 2, axis=1)[:, None]
         F[~ok] = self.spec.failure_penalty
-        return Evaluations(objective, residuals, F, ok, reasons, details, correlations)
+        return Evaluations(objective, residuals, F, ok, reasons, details, correlations,
+                           results=list(results) if keep_results else None)
 
     def _batch_residuals(self, results: list):
         """Vectorized residuals when every point succeeded with the same modes, else None."""
@@ -222,6 +239,87 @@ class UpdatingProblem:
             return None  # the per-point path reports the zero-norm mode
         freqs = np.stack([r.frequencies_hz for r in results])
         return fn(freqs, shapes, self.measured, self.spec)
+
+    # ---- Jacobian --------------------------------------------------------------------------
+    @property
+    def has_exact_jacobian(self) -> bool:
+        """True when the model provides modal derivatives and the formulation an exact Jacobian."""
+        return callable(getattr(self.model, "modal_derivatives", None)) and self.formulation.jacobian is not None
+
+    @property
+    def jacobian_cost_bound(self) -> int:
+        """Upper bound of an exact Jacobian's cost in eigen-solve equivalents (every measured mode
+        differentiated); a forward-difference Jacobian costs n_params model evaluations."""
+        if not self.has_exact_jacobian:
+            return self.n_params
+        return int(self.model.derivative_cost(self.measured.n_modes, self.n_params))
+
+    def jacobian(
+        self,
+        x: np.ndarray,
+        runner: Runner | None = None,
+        result=None,
+        *,
+        fd_step: float = 1e-3,
+        fallback: bool = True,
+    ) -> Jacobian:
+        """Jacobian dr/dx (r, k) of the residual vector at the normalized point x (module docstring).
+
+        result: the model's ModalResult at x if known (else the model is evaluated here, not
+        counted in ``Jacobian.cost``); fd_step: step in x of the forward differences of the
+        fallback; fallback=False: return a Jacobian with J None and the reason instead of
+        evaluating the difference points (the caller, e.g. a counting Evaluator, does it).
+        """
+        x = as_points(np.asarray(x, float)[None, :], self.n_params)[0]
+        theta = self.parameters.to_physical(x)
+        if result is None:
+            ev = self.evaluate(x[None, :], runner, keep_results=True)
+            result = ev.results[0]
+        ok, modal_r, corr = self._modal_residuals(result)
+        if not ok:  # a failed point: the residuals are the constant failure value
+            return Jacobian(np.zeros((self.n_residuals, self.n_params)), "failed", 0, str(modal_r))
+        reason = ""
+        if self.has_exact_jacobian:
+            try:
+                J, cost = self._exact_jacobian(theta, result, corr)
+                return Jacobian(J * self.parameters_span[None, :], "exact", cost)
+            except CloseEigenvalues as exc:
+                reason = f"close_eigenvalues: {exc}"
+                _warn_once(self.name, reason)
+        else:
+            reason = "no_derivatives"
+        if not fallback:
+            return Jacobian(None, "fd", 0, reason)
+        X, h = fd_points(x, fd_step)
+        ev = self.evaluate(X, runner)
+        r0 = np.r_[modal_r, penalty_residuals(theta, x, self.parameters, self.spec)[0]]
+        J = (ev.residuals - r0[None, :]).T / h[None, :]
+        return Jacobian(J, "fd", len(X), reason, fd_evaluations=ev)
+
+    @property
+    def parameters_span(self) -> np.ndarray:
+        """dtheta/dx = upper - lower per parameter."""
+        return self.parameters.upper - self.parameters.lower
+
+    def _modal_residuals(self, result):
+        """(ok, modal residuals or the failure, correlation) of one model result."""
+        if not isinstance(result, ModalResult):
+            return False, result, None
+        try:
+            modal_r, corr = self.formulation.residuals(result, self.measured, self.spec)
+        except (ModelEvaluationError, ValueError, KeyError, IndexError) as exc:
+            return False, exc, None
+        return bool(np.all(np.isfinite(modal_r))), modal_r, corr
+
+    def _exact_jacobian(self, theta: np.ndarray, result: ModalResult, corr) -> tuple[np.ndarray, int]:
+        """dr/dtheta (r, k) from the model's modal derivatives of the paired modes, and its cost."""
+        paired = np.unique(corr.analytical_index[corr.matched])
+        names = self.parameters.names
+        derivs = self.model.modal_derivatives(
+            self.parameters.as_dict(theta), result, parameters=names, modes=paired.tolist()
+        )
+        J_modal = self.formulation.jacobian(result, derivs, corr, self.measured, self.spec)
+        return np.vstack([J_modal, penalty_jacobian(theta, self.parameters, self.spec)]), int(derivs.cost)
 
     # ---- uncounted conveniences (a run counts through its Evaluator) ----------------------
     def objective(self, X: np.ndarray, runner: Runner | None = None) -> np.ndarray:
@@ -252,6 +350,44 @@ class UpdatingProblem:
     def mode_table(self, theta: np.ndarray, runner: Runner | None = None) -> pd.DataFrame:
         """One row per measured mode at physical point theta: f, error %, MAC, matched."""
         return correlation_table(self.correlation_at(theta, runner), self.measured)
+
+
+@dataclass(frozen=True)
+class Jacobian:
+    """Jacobian dr/dx (r, k) in normalized coordinates at one point.
+
+    method: "exact" (modal derivatives), "fd" (forward differences) or "failed" (the point
+    failed: zero Jacobian); cost: eigen-solve equivalents of an exact Jacobian, or the number
+    of difference points evaluated; reason: why not exact; fd_evaluations: the difference
+    points' evaluations (a counting evaluator records them).
+    """
+
+    J: np.ndarray | None
+    method: str
+    cost: int
+    reason: str = ""
+    fd_evaluations: Evaluations | None = None
+
+
+def fd_points(x: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Forward-difference points x + h_j e_j (backward where x_j + step > 1); returns (X (k, k), h (k,))."""
+    x = np.asarray(x, float)
+    h = np.where(x + step <= 1.0, step, -step)
+    X = np.tile(x, (x.size, 1)) + np.diag(h)
+    return X, h
+
+
+_WARNED: set[str] = set()
+
+
+def _warn_once(name: str, message: str) -> None:
+    """Log the first finite-difference fallback of each model as a warning, later ones at debug level."""
+    if name in _WARNED:
+        log.debug("%s: finite-difference Jacobian (%s)", name, message)
+        return
+    _WARNED.add(name)
+    log.warning("%s: finite-difference Jacobian at this point (%s); further fallbacks are logged at debug level",
+                name, message)
 
 
 def _check_type(argument: str, value, kind, expected: str) -> None:
