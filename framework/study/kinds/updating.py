@@ -4,7 +4,8 @@ A study lists algorithms (each an optimizer with settings, runs and budget overr
 run updates the structure's parameters to the measured modes and predicts the validation
 cases with the updated values. Tables:
 
-- ``runs``: one row per run: structure, algorithm, objective (best Pi), n_evaluations,
+- ``runs``: one row per run: structure, algorithm, objective (best Pi), n_evaluations
+  (model evaluations + eigen-solve equivalents of exact Jacobians), n_jacobians,
   n_iterations, wall_s, status (target, stalled, converged, budget, max_iterations,
   completed, failed, error), error, n_failed_evaluations, failures, message,
   condition_number (SM), and every optimizer setting as its own column;
@@ -368,6 +369,7 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
     tables["runs"].append({
         "objective": result.objective,
         "n_evaluations": result.n_evaluations,
+        "n_jacobians": result.n_jacobians,
         "n_iterations": result.n_iterations,
         "wall_s": result.wall_s,
         "status": result.status,
