@@ -15,7 +15,8 @@ eigen-solve equivalents below the k model evaluations of a difference Jacobian),
 "fd". With "fd" the run is the one of earlier versions. An exact Jacobian falls back to
 forward differences (step ``diff_step``) at points with repeated or close eigenvalues.
 
-Reported: iterations (Jacobian evaluations), every model evaluation including those of
+Reported: iterations (Jacobian evaluations, also when the budget ran out; also counted as
+``n_jacobians``), every model evaluation including those of
 the Jacobian (counted by the run's evaluator; an exact Jacobian in eigen-solve
 equivalents), the Jacobian method and its counts in ``extra``, and the condition number of the
 sensitivity matrix J = dr/dx at the solution (normalized coordinates). The shared
@@ -150,7 +151,11 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         if status == "converged" and budget.target_objective is not None and 2 * res.cost < budget.target_objective:
             status = "target"
     except BudgetExhausted:
-        status, n_iter, message = "budget", 0, "evaluation budget exhausted"
+        # iterations = Jacobians computed (least_squares' njev: 1 + accepted steps)
+        n_iter = evaluator.n_jacobians if method == "exact" else termination.iterations + 1
+        if method == "fd":
+            evaluator.n_jacobians += n_iter
+        status, message = "budget", "evaluation budget exhausted"
     if method == "exact":
         extra["jacobian_methods"] = dict(evaluator.jacobian_methods)
         extra["jacobian_equivalents"] = evaluator.jacobian_equivalents
