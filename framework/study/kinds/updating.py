@@ -211,6 +211,7 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
     """One run per algorithm entry and seed; the task holds everything the run needs."""
     data = cfg.model_dump(mode="json")
     common = {k: data[k] for k in ("structure", "measured", "validation", "parameters", "objective")}
+    common["objective"] = effective_objective(common["objective"])
     parts = []
     for label, alg in cfg.algorithms.items():
         settings = settings_model(alg.algorithm).model_validate(alg.settings).model_dump(mode="json")
@@ -223,6 +224,17 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
             parts.append({"label": label, "seed": cfg.seed + i, "task": task, "columns": columns,
                           "relevant": relevant})
     return parts
+
+
+def effective_objective(objective: dict) -> dict:
+    """The objective section as it acts: a formulation that reads no options (``spec``) gets none,
+    so that a study sweeping the formulation and another formulation's options (e.g.
+    ``objective.options.shape_term``) plans each of its runs once (equal tasks, one run id)."""
+    from framework.objectives import get_formulation
+
+    if objective.get("options") and get_formulation(objective["formulation"]).check_options is None:
+        return {**objective, "options": {}}
+    return objective
 
 
 def identity(task: dict) -> dict:
