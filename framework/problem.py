@@ -22,7 +22,8 @@ derivatives with respect to theta from the eigenvalue and eigenvector derivative
 paired modes (pairing held fixed at the point: the residuals are piecewise smooth;
 unmatched modes give zero rows), the penalty terms' derivatives, and the chain rule
 dtheta/dx = upper - lower. Otherwise, or at a point with repeated or close eigenvalues
-(warned once per model), it is the forward-difference Jacobian.
+or where the derivatives fail (warned once per model), it is the forward-difference
+Jacobian.
 
 Problem transforms (two damage states at once, :func:`framework.damage.two_state`; the
 SNT derated objective, :func:`framework.optimizers.niching.derated`) follow the same
@@ -252,7 +253,8 @@ class UpdatingProblem:
         differentiated); a forward-difference Jacobian costs n_params model evaluations."""
         if not self.has_exact_jacobian:
             return self.n_params
-        return int(self.model.derivative_cost(self.measured.n_modes, self.n_params))
+        cost = getattr(self.model, "derivative_cost", None)
+        return int(cost(self.measured.n_modes, self.n_params)) if cost is not None else self.measured.n_modes
 
     def jacobian(
         self,
@@ -285,6 +287,9 @@ class UpdatingProblem:
                 return Jacobian(J * self.parameters_span[None, :], "exact", cost)
             except CloseEigenvalues as exc:
                 reason = f"close_eigenvalues: {exc}"
+                _warn_once(self.name, reason)
+            except (ModelEvaluationError, np.linalg.LinAlgError, RuntimeError) as exc:  # e.g. a singular system
+                reason = f"derivatives_failed: {type(exc).__name__}: {exc}"
                 _warn_once(self.name, reason)
         else:
             reason = "no_derivatives"

@@ -205,6 +205,24 @@ def test_close_eigenvalues_fall_back_to_finite_differences(caplog):
     assert problem.jacobian(problem.x_initial).method == "exact"
 
 
+def test_failed_derivatives_fall_back_to_finite_differences():
+    from framework.errors import ModelEvaluationError
+
+    class Broken(MatrixModel):
+        def modal_derivatives(self, theta, result=None, **kwargs):
+            raise ModelEvaluationError("not_converged", "gravity analysis at theta + h")
+
+    model = _diagonal_model()
+    broken = Broken([np.diag([1.0, 0, 0]), np.diag([0, 4.0, 0]), np.diag([0, 0, 9.0])], np.eye(3), model.parameters,
+                    {"u1": 0, "u2": 1, "u3": 2}, n_modes=3, name="broken")
+    measured = MeasuredModes(frequencies_hz=np.array([_f_hz(1.1), _f_hz(4.4)]), dofs=("u1", "u2", "u3"),
+                             shapes=np.eye(3)[:, :2], name="two")
+    jac = UpdatingProblem(broken, measured).jacobian(np.full(3, 0.3))
+    assert jac.method == "fd" and jac.reason.startswith("derivatives_failed: ModelEvaluationError")
+    exact = UpdatingProblem(model, measured).jacobian(np.full(3, 0.3))
+    np.testing.assert_allclose(jac.J, exact.J, atol=1e-3 * np.abs(exact.J).max())
+
+
 # ---- the sensitivity method with the exact Jacobian ---------------------------------------------
 @needs_smu
 def test_sm_exact_jacobian_counts_and_reaches_the_optimum_in_fewer_evaluations():
@@ -250,3 +268,35 @@ def test_evaluator_jacobian_budget_and_history():
     assert len(evaluator.history()) == 6 and np.all(evaluator.history() == evaluator.history()[0])
     with pytest.raises(BudgetExhausted):
         evaluator.jacobian(x)  # the bound (5) exceeds the 1 evaluation left
+
+
+# ---- the four-storey study's formulations, as a small study --------------------------------------
+@needs_smu
+def test_four_story_study_formulations_serial_and_processes(tmp_path):
+    """The sweep formulation x shape_term plans the spec runs once; SM's exact Jacobians are
+    counted in the runs table; serial and process execution give the same tables."""
+    from pathlib import Path
+
+    import pandas as pd
+
+    from framework.study.config import load, validate
+    from framework.study.plan import plan
+    from framework.study.runner import run_study
+
+    config = Path(__file__).resolve().parents[1] / "studies" / "external_four_story.yaml"
+    data = load(config).model_dump(mode="json")
+    assert len(plan(load(config))) == 5 * 10 * 3  # reference x {mac, eigenvector}, spec once
+    data.update(runs=2, report={}, algorithms={"sm": {"algorithm": "sm", "settings": {"start": "random"}}})
+    tables = {}
+    for backend in ("serial", "processes"):
+        cfg = validate(dict(data, output=str(tmp_path / backend),
+                            execution={"backend": backend, "workers": 2, "progress": False}))
+        run_study(cfg, figures=False)
+        tables[backend] = pd.read_csv(tmp_path / backend / "runs.csv").drop(columns=["wall_s"])
+    pd.testing.assert_frame_equal(tables["serial"], tables["processes"], check_exact=True)
+    runs = tables["serial"]
+    assert sorted(set(zip(runs["formulation"], runs["shape_term"]))) == [
+        ("reference", "eigenvector"), ("reference", "mac"), ("spec", "mac")]
+    assert (runs["n_jacobians"] > 0).all() and (runs["jacobian"] == "auto").all()
+    # every Jacobian costs 2 eigen-solve equivalents (2 measured modes) after at least one evaluation
+    assert (runs["n_evaluations"] >= 3 * runs["n_jacobians"]).all()
