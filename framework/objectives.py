@@ -20,6 +20,11 @@ objective vector [Pi_f, Pi_MAC] (NSGA-II) are three views of one definition.
   regularization     sqrt(tau) (z - z_0), z the parameters as ratios to initial values
                      ("ratio") or normalized to their bounds ("normalized")  (Tikhonov)
 
+Exact Jacobians (:func:`spec_jacobian`, :func:`penalty_jacobian`; used by
+:meth:`framework.problem.UpdatingProblem.jacobian`) hold the pairing fixed:
+d eps_i = df_a / f_e,i with df = dlambda / (8 pi^2 f); d[(1 - sqrt MAC)/sqrt MAC] =
+-dMAC / (2 MAC^1.5) with the MAC derivative of :func:`mac_derivative`.
+
 A formulation maps (modal result, measured modes, spec) to residuals; "spec" is the one
 above. Every formulation is named in the static table ``FORMULATIONS`` (name ->
 "module:attribute", resolved on use); a new one is one line there.

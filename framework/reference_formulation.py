@@ -31,6 +31,8 @@ Options (``ObjectiveSpec.options``):
   with w_psi,i,d = 1 / std_psi(d, i) for ``weights: std`` when shape standard deviations are
   given (else 1). Residual layout: [r_lambda (m), mode 1's n_dof - 1 shape residuals, mode
   2's, ...]; an unmatched mode sets its n_dof residuals to sqrt(unmatched_penalty / n_dof).
+  A simulated shape that is exactly 0 at q_i fails the evaluation ("zero_reference_entry").
+  The objective vector stays [Pi_lambda, Pi_MAC], the second being the shape term either way.
 
 Exact Jacobians (:func:`reference_jacobian`, pairing held fixed, unmatched modes zero rows):
 dr_lambda,i = -w_lambda,i dlambda_a,j / lambda_e,i; the MAC term as in

@@ -18,6 +18,10 @@ with lumped translational masses). Modes solve K phi = omega^2 M phi, f = omega 
 
 Measured DOFs are given by 0-based index with a label each. The model is picklable and
 stateless between calls (the matrices are read-only inputs).
+
+Exact modal derivatives (:meth:`MatrixModel.modal_derivatives`, for exact Jacobians):
+dK/dalpha_j = K_j, dM = 0, Nelson's method on the full (n_dof) problem with the full
+eigenvectors kept in ``ModalResult.meta["eigenvectors"]`` (see :mod:`framework.modal_derivatives`).
 """
 
 from __future__ import annotations
