@@ -11,6 +11,17 @@ would exceed ``max_evaluations`` raises :class:`BudgetExhausted` before any mode
 and ``affords(n)`` / ``remaining`` let an adapter plan. ``progress(n_new)`` is called
 with the number of new model evaluations (e.g. a progress bar).
 
+Jacobians (``evaluator.jacobian(x)``, used by the sensitivity method) are counted too:
+an exact Jacobian (modal derivatives, :meth:`framework.problem.UpdatingProblem.jacobian`)
+adds its cost in eigen-solve equivalents (see :mod:`framework.modal_derivatives`) to
+``n_evaluations`` and enters the history as that many evaluations without a new value; a
+finite-difference Jacobian is its k model evaluations, recorded like any other.
+``n_evaluations`` is therefore model evaluations + Jacobian equivalents; ``n_jacobians``
+counts the Jacobians of either kind and ``jacobian_equivalents`` the equivalents alone.
+The point of the last single-point evaluation is remembered with the model's result, so a
+Jacobian at that point (least squares asks for one right after evaluating it) does not
+solve the model again.
+
 A child evaluator (``evaluator.child(problem, max_evaluations)``) serves a sub-search on a
 transformed problem (SNT's derated objective): it has its own best point and budget, and
 every evaluation also counts in the parent, which records the untransformed values
@@ -26,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from framework.problem import Evaluations, Runner, as_points
+from framework.problem import Evaluations, Runner, as_points, fd_points
 
 
 @dataclass(frozen=True)
@@ -71,6 +82,10 @@ class Evaluator:
         self.best_objective = np.inf
         self._values: list[np.ndarray] = []  # objective per evaluated point, NaN where it failed
         self._failed: set[bytes] = set()
+        self.n_jacobians = 0
+        self.jacobian_equivalents = 0  # eigen-solve equivalents of exact Jacobians
+        self.jacobian_methods: Counter[str] = Counter()  # "exact" / "fd" / "failed"
+        self._last: tuple[bytes, object, np.ndarray] | None = None  # last single point: (x, result, residuals)
 
     # ---- facts of the problem ---------------------------------------------------------
     @property
@@ -110,9 +125,51 @@ class Evaluator:
         X = as_points(X, self.n_params)
         if not self.affords(len(X)):
             raise BudgetExhausted(f"{len(X)} point(s) do not fit the {self.remaining} evaluations left")
-        ev = self.problem.evaluate(X, self.runner)
+        if len(X) == 1 and self.cost == 1 and hasattr(self.problem, "jacobian"):
+            ev = self.problem.evaluate(X, self.runner, keep_results=True)
+            self._last = (X[0].tobytes(), ev.results[0], ev.residuals[0])
+        else:
+            ev = self.problem.evaluate(X, self.runner)
         self._record(X, ev)
         return ev
+
+    def jacobian(self, x: np.ndarray, fd_step: float = 1e-3) -> np.ndarray:
+        """Jacobian dr/dx (r, k) at x, counted: exact when the problem has one (its cost in
+        eigen-solve equivalents), else forward differences with step ``fd_step`` in x (k model
+        evaluations). Evaluates x first unless it was the last single point evaluated."""
+        x = as_points(np.asarray(x, float)[None, :], self.n_params)[0]
+        if self._last is not None and self._last[0] == x.tobytes():
+            _, result, r0 = self._last
+        else:
+            ev = self.evaluate(x[None, :])
+            result, r0 = (ev.results[0] if ev.results else None), ev.residuals[0]
+        problem = self.problem
+        if getattr(problem, "has_exact_jacobian", False) and self.cost == 1:
+            if problem.jacobian_cost_bound > self.remaining:
+                raise BudgetExhausted(f"a Jacobian does not fit the {self.remaining} evaluations left")
+            jac = problem.jacobian(x, self.runner, result, fd_step=fd_step, fallback=False)
+            if jac.J is not None:
+                self._record_cost(jac.cost)
+                self.n_jacobians += 1
+                self.jacobian_methods[jac.method] += 1
+                return jac.J
+        X, h = fd_points(x, fd_step)
+        fd = self.evaluate(X)
+        self.n_jacobians += 1
+        self.jacobian_methods["fd"] += 1
+        return (fd.residuals - r0[None, :]).T / h[None, :]
+
+    def _record_cost(self, n: int) -> None:
+        """Count n evaluation equivalents that bring no new objective value (an exact Jacobian)."""
+        if n <= 0:
+            return
+        self.n_evaluations += n
+        self.jacobian_equivalents += n
+        self._values.append(np.full(n, np.nan))
+        if self.parent is not None:
+            self.parent._record_cost(n)
+        elif self.progress is not None:
+            self.progress(n)
 
     def _record(self, X: np.ndarray, ev: Evaluations) -> None:
         n_new = len(X) * self.cost

@@ -20,6 +20,11 @@ objective vector [Pi_f, Pi_MAC] (NSGA-II) are three views of one definition.
   regularization     sqrt(tau) (z - z_0), z the parameters as ratios to initial values
                      ("ratio") or normalized to their bounds ("normalized")  (Tikhonov)
 
+Exact Jacobians (:func:`spec_jacobian`, :func:`penalty_jacobian`; used by
+:meth:`framework.problem.UpdatingProblem.jacobian`) hold the pairing fixed:
+d eps_i = df_a / f_e,i with df = dlambda / (8 pi^2 f); d[(1 - sqrt MAC)/sqrt MAC] =
+-dMAC / (2 MAC^1.5) with the MAC derivative of :func:`mac_derivative`.
+
 A formulation maps (modal result, measured modes, spec) to residuals; "spec" is the one
 above. Every formulation is named in the static table ``FORMULATIONS`` (name ->
 "module:attribute", resolved on use); a new one is one line there.
@@ -309,6 +314,56 @@ def spec_residuals_batch(freqs: np.ndarray, shapes: np.ndarray, measured: Measur
     return r, ModeCorrelations(idx, fe, fa, eps, mac_out, matched)
 
 
+def measured_rows(result: ModalResult, measured: MeasuredModes) -> np.ndarray:
+    """Rows of ``result.shapes`` (and of ModalDerivatives.dphi) at the measured DOFs, in their order."""
+    index = {d: i for i, d in enumerate(result.dofs)}
+    return np.array([index[d] for d in measured.dofs], dtype=int)
+
+
+def mac_derivative(phi_e: np.ndarray, phi_a: np.ndarray, dphi_a: np.ndarray) -> np.ndarray:
+    """d MAC / d theta (k,) of real shapes phi_e, phi_a (n,) with dphi_a (n, k):
+
+    dMAC = 2 (phi_e' phi_a)(phi_e' dphi_a) / ((phi_e' phi_e)(phi_a' phi_a)) - MAC 2 (phi_a' dphi_a) / (phi_a' phi_a).
+    """
+    ea, ee, aa = phi_e @ phi_a, phi_e @ phi_e, phi_a @ phi_a
+    mac = ea**2 / (ee * aa)
+    return 2.0 * ea * (phi_e @ dphi_a) / (ee * aa) - mac * 2.0 * (phi_a @ dphi_a) / aa
+
+
+def frequency_derivative(f_hz: float, dlambda: np.ndarray) -> np.ndarray:
+    """d f / d theta from d lambda / d theta: f = sqrt(lambda) / 2 pi, so df = dlambda / (8 pi^2 f)."""
+    return dlambda / (8.0 * np.pi**2 * f_hz)
+
+
+def shape_term_derivative(mac: float, dmac: np.ndarray) -> np.ndarray:
+    """d[(1 - sqrt MAC) / sqrt MAC] = -dMAC / (2 MAC^1.5) (0 where MAC was clipped at 1e-12)."""
+    if mac <= 1e-12:
+        return np.zeros_like(dmac)
+    return -dmac / (2.0 * mac**1.5)
+
+
+def spec_jacobian(result: ModalResult, derivatives, corr: ModeCorrelation, measured: MeasuredModes,
+                  spec: ObjectiveSpec) -> np.ndarray:
+    """d r / d theta (r, k) of :func:`spec_residuals` at a point with the pairing ``corr`` held fixed
+    (unmatched modes: zero rows). dr_f,i = sqrt(alpha w_f,i) df_a / f_e,i;
+    dr_s,i = sqrt(beta w_s,i) d[(1 - sqrt MAC_i) / sqrt MAC_i]."""
+    m = measured.n_modes
+    shape_term = use_shape_term(measured, spec)
+    J = np.zeros((spec_n_residuals(measured, spec), len(derivatives.parameters)))
+    rows = measured_rows(result, measured) if shape_term else None
+    for i in np.flatnonzero(corr.matched):
+        a = int(corr.analytical_index[i])
+        pos = derivatives.position(a)
+        df = frequency_derivative(result.frequencies_hz[a], derivatives.dlambda[pos])
+        J[i] = np.sqrt(spec.alpha * measured.w_frequency[i]) * df / measured.frequencies_hz[i]
+        if shape_term:
+            phi_a = result.shapes[rows, a]
+            dmac = mac_derivative(measured.shapes[:, i], phi_a, derivatives.dphi[rows, pos, :])
+            mac = float(np.clip(corr.mac[i], 1e-12, 1.0))
+            J[m + i] = np.sqrt(spec.beta * measured.w_shape[i]) * shape_term_derivative(mac, dmac)
+    return J
+
+
 def use_shape_term(measured: MeasuredModes, spec: ObjectiveSpec) -> bool:
     return bool(spec.use_shapes and measured.has_shapes and spec.beta > 0)
 
@@ -340,9 +395,14 @@ class Formulation:
     #: optional check of ``ObjectiveSpec.options`` (raises ValueError naming the key); None:
     #: the formulation reads no options
     check_options: Callable[[dict], None] | None = None
+    #: optional exact Jacobian jacobian(result, derivatives, correlation, measured, spec) -> (r, k)
+    #: d residuals / d theta from :class:`~framework.modal_derivatives.ModalDerivatives` of the
+    #: paired modes (pairing held fixed); None: finite differences only
+    jacobian: Callable | None = None
 
 
-SPEC_FORMULATION = Formulation(spec_residuals, spec_n_residuals, spec_split, batch_residuals=spec_residuals_batch)
+SPEC_FORMULATION = Formulation(spec_residuals, spec_n_residuals, spec_split, batch_residuals=spec_residuals_batch,
+                               jacobian=spec_jacobian)
 
 #: Every selectable formulation: name -> "module:attribute", imported when first used, so
 #: that which names are valid never depends on which modules happen to be imported.
@@ -384,6 +444,39 @@ def penalty_residuals(
     if not parts:
         return np.zeros((theta.shape[0], 0))
     return np.concatenate(parts, axis=1)
+
+
+def penalty_jacobian(theta: np.ndarray, parameters: ParameterSet, spec: ObjectiveSpec) -> np.ndarray:
+    """d (penalty residuals) / d theta (n_pen, k) at one point theta (k,).
+
+    Ratio constraint r = sqrt(w |d|), d = theta_a/theta_b - r_0: dr = sqrt(w) sign(d) dd / (2 sqrt|d|)
+    with dd/dtheta_a = 1/theta_b, dd/dtheta_b = -theta_a/theta_b^2 (not differentiable at d = 0,
+    where the zero subgradient is used). Tikhonov: sqrt(tau)/theta_0,j ("ratio") or
+    sqrt(tau)/(upper_j - lower_j) ("normalized") on the diagonal.
+    """
+    theta = np.asarray(theta, float)
+    k = theta.size
+    names = parameters.names
+    rows = []
+    for c in spec.ratio_constraints:
+        a, b = names.index(c.numerator), names.index(c.denominator)
+        d = theta[a] / theta[b] - parameters.initial[a] / parameters.initial[b]
+        row = np.zeros(k)
+        if d != 0.0:
+            scale = np.sqrt(c.weight) * np.sign(d) / (2.0 * np.sqrt(abs(d)))
+            row[a] += scale / theta[b]
+            row[b] -= scale * theta[a] / theta[b] ** 2
+        rows.append(row[None, :])
+    if spec.regularization_tau > 0:
+        if spec.regularization_space == "ratio":
+            with np.errstate(divide="ignore"):
+                diag = np.where(parameters.initial != 0, 1.0 / parameters.initial, np.nan)
+        else:
+            diag = 1.0 / (parameters.upper - parameters.lower)
+        rows.append(np.sqrt(spec.regularization_tau) * np.diag(diag))
+    if not rows:
+        return np.zeros((0, k))
+    return np.concatenate(rows, axis=0)
 
 
 def n_penalty_residuals(parameters: ParameterSet, spec: ObjectiveSpec) -> int:

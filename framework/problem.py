@@ -23,6 +23,16 @@ without a Python object per point; a population's residuals are computed in one 
 runner's list of ModalResult goes through the same vectorized code, so every runner gives
 the same numbers.
 
+``jacobian(x, runner=None)`` is the exact Jacobian dr/dx of the residual vector at one
+point when the model provides modal derivatives (``model.modal_derivatives``, see
+:mod:`framework.modal_derivatives`) and the formulation an exact Jacobian: the residual
+derivatives with respect to theta from the eigenvalue and eigenvector derivatives of the
+paired modes (pairing held fixed at the point: the residuals are piecewise smooth;
+unmatched modes give zero rows), the penalty terms' derivatives, and the chain rule
+dtheta/dx = upper - lower. Otherwise, or at a point with repeated or close eigenvalues
+or where the derivatives fail (warned once per model), it is the forward-difference
+Jacobian.
+
 Problem transforms (two damage states at once, :func:`framework.damage.two_state`; the
 SNT derated objective, :func:`framework.optimizers.niching.derated`) follow the same
 protocol: ``parameters``, ``n_params``, ``n_objectives``, ``x_initial``,
@@ -40,6 +50,7 @@ import pandas as pd
 
 from framework.errors import InputError, ModelEvaluationError
 from framework.measurements import MeasuredModes
+from framework.modal_derivatives import CloseEigenvalues
 from framework.models.arrays import ModalArrays, array_method
 from framework.models.base import ModalResult, StructuralModel, modal_many
 from framework.objectives import (
@@ -50,6 +61,7 @@ from framework.objectives import (
     correlation_table,
     get_formulation,
     n_penalty_residuals,
+    penalty_jacobian,
     penalty_residuals,
     use_shape_term,
 )
@@ -80,6 +92,8 @@ class Evaluations:
     details: list[str]
     correlations: list
     source: Evaluations | None = None
+    #: the model's ModalResult (or ModelEvaluationError) per point, when asked for (``keep_results``)
+    results: list | None = None
 
     def __len__(self) -> int:
         return len(self.objective)
@@ -169,14 +183,18 @@ class UpdatingProblem:
         return self.parameters.to_physical(x)
 
     # ---- evaluation ---------------------------------------------------------------------
-    def evaluate(self, X: np.ndarray, runner: Runner | None = None) -> Evaluations:
-        """Evaluate points X (n, k) in normalized coordinates (clipped to [0, 1]); pure."""
+    def evaluate(self, X: np.ndarray, runner: Runner | None = None, keep_results: bool = False) -> Evaluations:
+        """Evaluate points X (n, k) in normalized coordinates (clipped to [0, 1]); pure.
+
+        keep_results: also return the model's results (``Evaluations.results``), e.g. to
+        differentiate at the point without solving it again."""
         X = as_points(X, self.n_params)
         theta = self.parameters.to_physical(X)
         n, r, m = len(X), self.n_residuals, self.n_modal_residuals
         residuals = np.empty((n, r))
         residuals[:, m:] = penalty_residuals(theta, X, self.parameters, self.spec)
-        residuals[:, :m], errors, correlations = self._modal_residuals(self._solve(theta, runner))
+        modal = self._solve(theta, runner, per_point=keep_results)
+        residuals[:, :m], errors, correlations = self._modal_residuals(modal)
         ok = np.ones(n, dtype=bool)
         ok[list(errors)] = False
         for i in np.flatnonzero(ok & ~np.all(np.isfinite(residuals), axis=1)):
@@ -195,12 +213,14 @@ class UpdatingProblem:
         F = self.formulation.split(residuals[:, :m], self.measured, self.spec)
         F = F + np.sum(residuals[:, m:] ** 2, axis=1)[:, None]
         F[~ok] = self.spec.failure_penalty
-        return Evaluations(objective, residuals, F, ok, reasons, details, correlations)
+        return Evaluations(objective, residuals, F, ok, reasons, details, correlations,
+                           results=list(modal) if keep_results else None)
 
-    def _solve(self, theta: np.ndarray, runner: Runner | None):
+    def _solve(self, theta: np.ndarray, runner: Runner | None, per_point: bool = False):
         """Modes of the points theta (n, k): a :class:`ModalArrays` in process for a model with
-        ``modal_arrays`` (no per-point objects), else the runner's list (ModalResult or error)."""
-        if runner is None or runner is modal_many:
+        ``modal_arrays`` (no per-point objects), else (or with ``per_point``) the runner's list
+        (ModalResult or error)."""
+        if not per_point and (runner is None or runner is modal_many):
             arrays = array_method(self.model)
             if arrays is not None:
                 return arrays(theta, self.parameters.names)
@@ -296,6 +316,84 @@ class UpdatingProblem:
         shapes[solved] = at
         return freqs, shapes, errors
 
+    # ---- Jacobian --------------------------------------------------------------------------
+    @property
+    def has_exact_jacobian(self) -> bool:
+        """True when the model provides modal derivatives and the formulation an exact Jacobian."""
+        return callable(getattr(self.model, "modal_derivatives", None)) and self.formulation.jacobian is not None
+
+    @property
+    def jacobian_cost_bound(self) -> int:
+        """Upper bound of an exact Jacobian's cost in eigen-solve equivalents (every measured mode
+        differentiated); a forward-difference Jacobian costs n_params model evaluations."""
+        if not self.has_exact_jacobian:
+            return self.n_params
+        cost = getattr(self.model, "derivative_cost", None)
+        return int(cost(self.measured.n_modes, self.n_params)) if cost is not None else self.measured.n_modes
+
+    def jacobian(
+        self,
+        x: np.ndarray,
+        runner: Runner | None = None,
+        result=None,
+        *,
+        fd_step: float = 1e-3,
+        fallback: bool = True,
+    ) -> Jacobian:
+        """Jacobian dr/dx (r, k) of the residual vector at the normalized point x (module docstring).
+
+        result: the model's ModalResult at x if known (else the model is evaluated here, not
+        counted in ``Jacobian.cost``); fd_step: step in x of the forward differences of the
+        fallback; fallback=False: return a Jacobian with J None and the reason instead of
+        evaluating the difference points (the caller, e.g. a counting Evaluator, does it).
+        """
+        x = as_points(np.asarray(x, float)[None, :], self.n_params)[0]
+        theta = self.parameters.to_physical(x)
+        if result is None:
+            ev = self.evaluate(x[None, :], runner, keep_results=True)
+            result = ev.results[0]
+        out, err = self._point(result)
+        if err is None and not np.all(np.isfinite(out[0])):
+            err = ModelEvaluationError("non_finite_residual", str(out[0]))
+        if err is not None:  # a failed point: the residuals are the constant failure value
+            return Jacobian(np.zeros((self.n_residuals, self.n_params)), "failed", 0, str(err))
+        modal_r, corr = out
+        reason = ""
+        if self.has_exact_jacobian:
+            try:
+                J, cost = self._exact_jacobian(theta, result, corr)
+                return Jacobian(J * self.parameters_span[None, :], "exact", cost)
+            except CloseEigenvalues as exc:
+                reason = f"close_eigenvalues: {exc}"
+                _warn_once(self.name, reason)
+            except (ModelEvaluationError, np.linalg.LinAlgError, RuntimeError) as exc:  # e.g. a singular system
+                reason = f"derivatives_failed: {type(exc).__name__}: {exc}"
+                _warn_once(self.name, reason)
+        else:
+            reason = "no_derivatives"
+        if not fallback:
+            return Jacobian(None, "fd", 0, reason)
+        X, h = fd_points(x, fd_step)
+        ev = self.evaluate(X, runner)
+        r0 = np.r_[modal_r, penalty_residuals(theta, x, self.parameters, self.spec)[0]]
+        J = (ev.residuals - r0[None, :]).T / h[None, :]
+        return Jacobian(J, "fd", len(X), reason, fd_evaluations=ev)
+
+    @property
+    def parameters_span(self) -> np.ndarray:
+        """dtheta/dx = upper - lower per parameter."""
+        return self.parameters.upper - self.parameters.lower
+
+    def _exact_jacobian(self, theta: np.ndarray, result: ModalResult, corr) -> tuple[np.ndarray, int]:
+        """dr/dtheta (r, k) from the model's modal derivatives of the paired modes, and its cost."""
+        paired = np.unique(corr.analytical_index[corr.matched])
+        names = self.parameters.names
+        derivs = self.model.modal_derivatives(
+            self.parameters.as_dict(theta), result, parameters=names, modes=paired.tolist()
+        )
+        J_modal = self.formulation.jacobian(result, derivs, corr, self.measured, self.spec)
+        return np.vstack([J_modal, penalty_jacobian(theta, self.parameters, self.spec)]), int(derivs.cost)
+
     # ---- uncounted conveniences (a run counts through its Evaluator) ----------------------
     def objective(self, X: np.ndarray, runner: Runner | None = None) -> np.ndarray:
         """Scalar objective Pi for each row of X (n, k) -> (n,)."""
@@ -338,6 +436,43 @@ def _scatter(corr, rows: np.ndarray, n: int, measured: MeasuredModes) -> ModeCor
         index[rows], f_model[rows], eps[rows] = corr.analytical_index, corr.f_model_hz, corr.frequency_error
         mac[rows], matched[rows], present[rows] = corr.mac, corr.matched, True
     return ModeCorrelations(index, measured.frequencies_hz, f_model, eps, mac, matched, present)
+
+@dataclass(frozen=True)
+class Jacobian:
+    """Jacobian dr/dx (r, k) in normalized coordinates at one point.
+
+    method: "exact" (modal derivatives), "fd" (forward differences) or "failed" (the point
+    failed: zero Jacobian); cost: eigen-solve equivalents of an exact Jacobian, or the number
+    of difference points evaluated; reason: why not exact; fd_evaluations: the difference
+    points' evaluations (a counting evaluator records them).
+    """
+
+    J: np.ndarray | None
+    method: str
+    cost: int
+    reason: str = ""
+    fd_evaluations: Evaluations | None = None
+
+
+def fd_points(x: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Forward-difference points x + h_j e_j (backward where x_j + step > 1); returns (X (k, k), h (k,))."""
+    x = np.asarray(x, float)
+    h = np.where(x + step <= 1.0, step, -step)
+    X = np.tile(x, (x.size, 1)) + np.diag(h)
+    return X, h
+
+
+_WARNED: set[str] = set()
+
+
+def _warn_once(name: str, message: str) -> None:
+    """Log the first finite-difference fallback of each model as a warning, later ones at debug level."""
+    if name in _WARNED:
+        log.debug("%s: finite-difference Jacobian (%s)", name, message)
+        return
+    _WARNED.add(name)
+    log.warning("%s: finite-difference Jacobian at this point (%s); further fallbacks are logged at debug level",
+                name, message)
 
 
 def _check_type(argument: str, value, kind, expected: str) -> None:

@@ -69,6 +69,12 @@ class StructuralModel(Protocol):
     bounds (studies may pick a subset or change bounds). dofs: labels of the DOFs at
     which shapes are returned. modal(theta): modes for parameter values ``theta``
     (parameters not given keep their initial values).
+
+    Optional, for exact Jacobians (:mod:`framework.modal_derivatives`):
+    ``modal_derivatives(theta, result=None, *, parameters=None, modes=None)`` ->
+    ModalDerivatives (d lambda / d theta and d phi / d theta of the mass-normalized shapes at
+    ``dofs``; raises CloseEigenvalues for a repeated or close eigenvalue) and
+    ``derivative_cost(n_modes, n_params)`` -> its cost in eigen-solve equivalents.
     """
 
     @property

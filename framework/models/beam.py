@@ -50,6 +50,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from framework.errors import InputError, ModelEvaluationError
+from framework.modal_derivatives import (
+    CLOSE_EIGENVALUE_RTOL,
+    ModalDerivatives,
+    check_separated,
+    eigen_derivatives,
+    normalize_mass,
+)
 from framework.models.base import ModalResult, full_theta
 from framework.parameters import Parameter, ParameterSet
 
@@ -292,8 +299,51 @@ class BeamNumpyModel:
             freqs, shapes, omega2 = beam_modes(ratios[good], self.n_modes, self.n_elements)
             rows = self._rows()
             for j, i in enumerate(good):
-                out[i] = ModalResult(freqs[j], shapes[j][rows, :], self.dofs, meta={"omega2": omega2[j]})
+                out[i] = ModalResult(freqs[j], shapes[j][rows, :], self.dofs,
+                                     meta={"omega2": omega2[j], "eigenvectors": shapes[j]})
         return out
+
+    # ---- derivatives ------------------------------------------------------------------
+    def derivative_cost(self, n_modes: int, n_params: int) -> int:
+        """Eigen-solve equivalents of :meth:`modal_derivatives` for n_modes modes: one factorization each."""
+        return int(n_modes)
+
+    def modal_derivatives(
+        self,
+        theta: Mapping[str, float],
+        result: ModalResult | None = None,
+        *,
+        parameters: Sequence[str] | None = None,
+        modes: Sequence[int] | None = None,
+        close_rtol: float = CLOSE_EIGENVALUE_RTOL,
+    ) -> ModalDerivatives:
+        """Exact derivatives of the modes with respect to the I ratios (Nelson's method).
+
+        K = sum_e r_e K_e is linear in the ratios (dK/dr_e = K_e, dM = 0) on the free DOFs
+        [interior vertical translations, rotations]; M = diag(m, 0) is singular (massless
+        rotations), which Nelson's method handles; the rotations of a mode are recovered
+        from its translations by static condensation, phi_r = -K_rr^-1 K_rv phi_v.
+        ``result``: this model's ModalResult at theta (else the modes are computed here).
+        """
+        names = list(self.parameters.names if parameters is None else parameters)
+        cols = [self.parameters.names.index(n) for n in names]
+        extra = 0
+        if result is None or "eigenvectors" not in result.meta:
+            result, extra = self.modal(theta), 1
+        lam = np.asarray(result.meta["omega2"], float)
+        modes = np.arange(lam.size) if modes is None else np.asarray(modes, dtype=int)
+        check_separated(lam, modes, close_rtol)
+        ratios = _ratios_from(full_theta(self.parameters, theta), self.n_elements)
+        blocks, _, nodal_mass_kg = _unit_matrices(self.n_elements)
+        nv = self.n_elements - 1
+        K = np.einsum("e,eij->ij", ratios, blocks)
+        M = np.diag(np.r_[np.full(nv, nodal_mass_kg), np.zeros(K.shape[0] - nv)])
+        phi_v = np.asarray(result.meta["eigenvectors"], float)[:, modes]
+        phi = np.vstack([phi_v, -np.linalg.solve(K[nv:, nv:], K[nv:, :nv] @ phi_v)])
+        phi = normalize_mass(M, phi)
+        dK_phi = np.einsum("eij,jm->ime", blocks[cols], phi)
+        dlam, dphi, n_fact = eigen_derivatives(K, M, lam[modes], phi, dK_phi)
+        return ModalDerivatives(modes, tuple(names), dlam, dphi[self._rows()], n_fact + extra)
 
 
 # ---- registry entry points ----------------------------------------------------------------

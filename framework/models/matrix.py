@@ -18,6 +18,10 @@ with lumped translational masses). Modes solve K phi = omega^2 M phi, f = omega 
 
 Measured DOFs are given by 0-based index with a label each. The model is picklable and
 stateless between calls (the matrices are read-only inputs).
+
+Exact modal derivatives (:meth:`MatrixModel.modal_derivatives`, for exact Jacobians):
+dK/dalpha_j = K_j, dM = 0, Nelson's method on the full (n_dof) problem with the full
+eigenvectors kept in ``ModalResult.meta["eigenvectors"]`` (see :mod:`framework.modal_derivatives`).
 """
 
 from __future__ import annotations
@@ -32,6 +36,13 @@ import scipy.linalg as la
 import scipy.sparse as sp
 
 from framework.errors import InputError, ModelEvaluationError
+from framework.modal_derivatives import (
+    CLOSE_EIGENVALUE_RTOL,
+    ModalDerivatives,
+    check_separated,
+    eigen_derivatives,
+    normalize_mass,
+)
 from framework.models.base import ModalResult, full_theta, safe_modal
 from framework.parameters import ParameterSet
 
@@ -103,6 +114,15 @@ class LinearStiffness:
     @property
     def n_parts(self) -> int:
         return int(self.D.shape[1])
+
+    def part(self, j: int) -> sp.csc_matrix:
+        """dK/dalpha_j = K_j as a sparse matrix (its own nonzeros only)."""
+        cache = self.__dict__.setdefault("_parts", {})
+        if j not in cache:
+            m = sp.csc_matrix((self.D[:, j].copy(), self.indices.copy(), self.indptr.copy()), shape=(self.n, self.n))
+            m.eliminate_zeros()
+            cache[j] = m
+        return cache[j]
 
     def __call__(self, alpha: np.ndarray) -> sp.csc_matrix:
         """K for one parameter vector alpha (J,)."""
@@ -242,13 +262,47 @@ class MatrixModel:
         return solve_shift_invert(K, self.mass, self.n_modes, self.sigma)
 
     def modal(self, theta: Mapping[str, float]) -> ModalResult:
+        """Modes at ``theta``; meta["eigenvectors"] keeps the full mass-normalized shapes (n_dof, n_modes)
+        for :meth:`modal_derivatives`."""
         lam, phi = self.eigen(theta)
         return ModalResult(
             np.sqrt(lam) / (2.0 * math.pi),
             phi[self.dof_index],
             self._dofs,
             mode_info={"eigenvalue": lam},
+            meta={"eigenvectors": phi},
         )
+
+    # ---- derivatives ------------------------------------------------------------------
+    def derivative_cost(self, n_modes: int, n_params: int) -> int:
+        """Eigen-solve equivalents of :meth:`modal_derivatives` for n_modes modes: one factorization each."""
+        return int(n_modes)
+
+    def modal_derivatives(
+        self,
+        theta: Mapping[str, float],
+        result: ModalResult | None = None,
+        *,
+        parameters: Sequence[str] | None = None,
+        modes: Sequence[int] | None = None,
+        close_rtol: float = CLOSE_EIGENVALUE_RTOL,
+    ) -> ModalDerivatives:
+        """Exact derivatives of the modes ``modes`` (default all) with respect to ``parameters``
+        (names, default all): dK/dalpha_j = K_j (K is linear in alpha), dM = 0, Nelson's method
+        (:mod:`framework.modal_derivatives`). ``result``: this model's ModalResult at theta (saves
+        the eigen solution); raises CloseEigenvalues for a repeated or close eigenvalue."""
+        names = list(self._parameters.names if parameters is None else parameters)
+        cols = [self._parameters.names.index(n) for n in names]
+        extra = 0
+        if result is None or "eigenvectors" not in result.meta:
+            result, extra = self.modal(theta), 1
+        lam = np.asarray(result.mode_info["eigenvalue"], float)
+        modes = np.arange(lam.size) if modes is None else np.asarray(modes, dtype=int)
+        check_separated(lam, modes, close_rtol)
+        phi = normalize_mass(self.mass, np.asarray(result.meta["eigenvectors"], float)[:, modes])
+        dK_phi = np.stack([np.asarray(self.stiffness.part(j) @ phi) for j in cols], axis=2)
+        dlam, dphi, n_fact = eigen_derivatives(self.stiffness_matrix(theta), self.mass, lam[modes], phi, dK_phi)
+        return ModalDerivatives(modes, tuple(names), dlam, dphi[self.dof_index], n_fact + extra)
 
     def modal_batch(self, thetas: Sequence[Mapping[str, float]]) -> list:
         """Evaluate many points with BLAS limited to one thread (many small solves)."""

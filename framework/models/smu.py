@@ -12,6 +12,10 @@ See that folder's README.md for their content. Structures and measured data, for
   K = sum_j (1 + alpha_j) K_j over 17 substructures, singular M0, 58 measured DOFs
   (labels ``dof<n>``, n the 1-based DOF number of the source), 5 measured modes with
   eigenvalue and shape standard deviations.
+
+Both are :class:`~framework.models.matrix.MatrixModel` s, so they provide exact modal
+derivatives (``modal_derivatives``: K linear in alpha, Nelson's method; the footbridge's
+singular M0 and 946 DOFs through sparse factorizations).
 """
 
 from __future__ import annotations

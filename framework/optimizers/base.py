@@ -47,10 +47,11 @@ class Settings(BaseModel):
 class OptimizerResult:
     """Outcome of one optimizer run (x in [0, 1]^k, theta in physical units).
 
-    n_evaluations counts model evaluations (a two-state point counts 2); history is the
-    best successful objective after each of them (NaN before the first success); extra is
-    plain JSON data. status "failed": no evaluation succeeded, and x_best, theta_best and
-    objective are NaN.
+    n_evaluations counts model evaluations (a two-state point counts 2) plus the
+    eigen-solve equivalents of exact Jacobians (see :mod:`framework.evaluator`); n_jacobians
+    counts Jacobians (exact or finite-difference); history is the best successful objective
+    after each evaluation (NaN before the first success); extra is plain JSON data.
+    status "failed": no evaluation succeeded, and x_best, theta_best and objective are NaN.
     """
 
     algorithm: str
@@ -67,6 +68,7 @@ class OptimizerResult:
     n_failed: int = 0
     failures: str = ""
     extra: dict = field(default_factory=dict)
+    n_jacobians: int = 0
 
 
 @dataclass
@@ -197,4 +199,5 @@ def build_result(algorithm: str, evaluator, seed: int, outcome: Outcome, wall_s:
         n_failed=evaluator.n_failed,
         failures=evaluator.failure_summary(),
         extra=json_safe(outcome.extra),
+        n_jacobians=evaluator.n_jacobians,
     )

@@ -7,8 +7,18 @@ residual vector r(x) = [sqrt(alpha) eps_i, sqrt(beta)(1 - sqrt MAC_i)/sqrt MAC_i
 forward-difference Jacobian ("2-point", step ``diff_step`` relative) and bounds [0, 1] on
 the normalized parameters, which keeps steps inside the physical box.
 
-Reported: iterations (Jacobian evaluations), every model evaluation including those of
-the Jacobian (counted by the run's evaluator), and the condition number of the
+Jacobian (setting ``jacobian``): "exact" uses the problem's exact Jacobian from modal
+derivatives (:meth:`framework.problem.UpdatingProblem.jacobian`; an error if the model or
+the formulation has none), "fd" least_squares' forward differences, "auto" (default) the
+exact one when available and cheaper by count than forward differences (its cost bound in
+eigen-solve equivalents below the k model evaluations of a difference Jacobian), else
+"fd". With "fd" the run is the one of earlier versions. An exact Jacobian falls back to
+forward differences (step ``diff_step``) at points with repeated or close eigenvalues.
+
+Reported: iterations (Jacobian evaluations, also when the budget ran out; also counted as
+``n_jacobians``), every model evaluation including those of
+the Jacobian (counted by the run's evaluator; an exact Jacobian in eigen-solve
+equivalents), the Jacobian method and its counts in ``extra``, and the condition number of the
 sensitivity matrix J = dr/dx at the solution (normalized coordinates). The shared
 termination rule is applied after every trust-region iteration (least_squares' callback,
 Pi = 2 cost), next to least_squares' own tolerances; the evaluation budget is enforced by
@@ -41,6 +51,7 @@ class SMSettings(Settings):
     ftol: float = Field(1e-10, gt=0)
     xtol: float = Field(1e-10, gt=0)
     gtol: float = Field(1e-10, gt=0)
+    jacobian: Literal["auto", "exact", "fd"] = "auto"
 
     @field_validator("x0", mode="before")
     @classmethod
@@ -63,6 +74,35 @@ def start_point(problem, seed: int, s: SMSettings) -> np.ndarray:
     return problem.x_initial.copy()
 
 
+def exact_jacobian_available(evaluator) -> bool:
+    """True when the run's problem offers an exact Jacobian (model derivatives and formulation)."""
+    return bool(getattr(evaluator.problem, "has_exact_jacobian", False)) and evaluator.cost == 1
+
+
+def jacobian_method(evaluator, choice: str) -> str:
+    """The Jacobian used for setting ``choice`` ("auto", "exact", "fd"): "exact" or "fd"."""
+    available = exact_jacobian_available(evaluator)
+    if choice == "exact" and not available:
+        raise ValueError(
+            "sm: jacobian 'exact' needs a model with modal_derivatives and a formulation with an exact "
+            "Jacobian (spec or reference); use jacobian 'auto' or 'fd'"
+        )
+    if choice == "fd" or not available:
+        return "fd"
+    if choice == "auto" and evaluator.problem.jacobian_cost_bound >= evaluator.n_params:
+        return "fd"
+    return "exact"
+
+
+def jacobian_argument(evaluator, method: str, diff_step: float):
+    """least_squares' ``jac``: the evaluator's counted Jacobian for "exact", "2-point" for "fd".
+
+    Also usable by other iterations of the method: ``evaluator.jacobian(x, fd_step)`` gives dr/dx."""
+    if method == "fd":
+        return "2-point"
+    return lambda x: evaluator.jacobian(x, fd_step=diff_step)
+
+
 def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     from scipy.optimize import least_squares
 
@@ -79,11 +119,13 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
             raise StopIteration
 
     extra: dict = {"x_start": x0.tolist(), "theta_start": evaluator.parameters.to_physical(x0).tolist()}
+    method = jacobian_method(evaluator, s.jacobian)
+    extra["jacobian"] = method
     try:
         res = least_squares(
             evaluator.residuals,
             x0,
-            jac="2-point",
+            jac=jacobian_argument(evaluator, method, s.diff_step),
             bounds=(0.0, 1.0),
             method="trf",
             diff_step=s.diff_step,
@@ -100,6 +142,8 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         else:
             status = "converged"
         n_iter = int(res.njev)
+        if method == "fd":  # least_squares differenced by itself: its Jacobians are counted here
+            evaluator.n_jacobians += n_iter
         message = str(res.message)
         J = np.asarray(res.jac)
         extra["condition_number"] = float(np.linalg.cond(J)) if J.size else float("nan")
@@ -107,5 +151,12 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         if status == "converged" and budget.target_objective is not None and 2 * res.cost < budget.target_objective:
             status = "target"
     except BudgetExhausted:
-        status, n_iter, message = "budget", 0, "evaluation budget exhausted"
+        # iterations = Jacobians computed (least_squares' njev: 1 + accepted steps)
+        n_iter = evaluator.n_jacobians if method == "exact" else termination.iterations + 1
+        if method == "fd":
+            evaluator.n_jacobians += n_iter
+        status, message = "budget", "evaluation budget exhausted"
+    if method == "exact":
+        extra["jacobian_methods"] = dict(evaluator.jacobian_methods)
+        extra["jacobian_equivalents"] = evaluator.jacobian_equivalents
     return Outcome(status, n_iter, message=message, extra=extra)

@@ -38,7 +38,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,6 +47,13 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from framework.errors import ModelEvaluationError
+from framework.modal_derivatives import (
+    CLOSE_EIGENVALUE_RTOL,
+    ModalDerivatives,
+    check_separated,
+    eigen_derivatives,
+    normalize_mass,
+)
 from framework.models.base import ModalResult, full_theta
 from framework.models.bridge.build import cable_tensions_from
 from framework.models.bridge.geometry import (
@@ -521,20 +528,33 @@ class BridgeFastModel:
             self._operators = extract_operators(self.plain)
         return self._operators
 
-    def modal(self, theta: Mapping[str, float]) -> ModalResult:
-        op = self.operators
-        ops = ops_module()
+    def _values(self, theta: Mapping[str, float]) -> dict:
         values = dict(self.plain.fixed)
         values.update(full_theta(self.plain.parameters, theta))
+        return values
+
+    def _gravity_state(self, values: Mapping[str, float]):
+        """OpenSees build and gravity analysis: (build info, cable tangents (E, 3, 3), cable forces)."""
+        op = self.operators
+        ops = ops_module()
         ops.wipe()
         try:
             info = self.plain.build(values)
             run_static(ops, self.gravity)
             k3 = _current_cable_tangent(ops, op.__dict__, values)
             force = np.array([ops.eleResponse(int(e), "axialForce")[0] for e in op.cable_elements])
-            tension = cable_tensions_from(force, info)
         finally:
             ops.wipe()
+        return info, k3, force
+
+    def modal(self, theta: Mapping[str, float]) -> ModalResult:
+        """Deck modes at ``theta``; meta keeps omega2 of every computed mode, and for
+        :meth:`modal_derivatives` the kept modes' mass-normalized equation-space shapes
+        (``eigenvectors``, n_master x kept) and the cable tangents (``cable_tangent``)."""
+        op = self.operators
+        values = self._values(theta)
+        info, k3, force = self._gravity_state(values)
+        tension = cable_tensions_from(force, info)
         omega2_max = (2.0 * math.pi * self.f_max_hz) ** 2
         with single_thread_blas():
             if is_symmetric_state(k3, op):
@@ -542,12 +562,86 @@ class BridgeFastModel:
             else:
                 omega2, phi = solve_band(op.stiffness(values, k3), op.mass, omega2_max)
         freqs = np.sqrt(np.maximum(omega2, 0.0)) / (2.0 * math.pi)
-        shapes = np.array([phi[t] + (y * phi[r] if r >= 0 else 0.0) for t, r, y in op.sensor_rows]).reshape(
-            len(op.sensor_rows), -1
-        )
+        shapes = self._sensor_shapes(phi)
         shares = energy_shares_eq(phi, op)
         meta = {"omega2": omega2, "cable_tension_n": tension, "target_tension_n": dict(info.target_tension_n)}
-        return keep_deck_modes(freqs, shapes, self.dofs, shares, self.deck_energy_min, meta)
+        result = keep_deck_modes(freqs, shapes, self.dofs, shares, self.deck_energy_min, meta)
+        keep = result.mode_info["model_mode"] - 1
+        return dataclasses.replace(result, meta={**result.meta, "eigenvectors": phi[:, keep], "cable_tangent": k3})
+
+    def _sensor_shapes(self, phi: np.ndarray) -> np.ndarray:
+        """Shapes at the sensors from equation-space shapes (n_master, ...): u_t + y r_x."""
+        rows = self.operators.sensor_rows
+        return np.array([phi[t] + (y * phi[r] if r >= 0 else 0.0) for t, r, y in rows]).reshape(
+            (len(rows),) + phi.shape[1:]
+        )
+
+    # ---- derivatives ------------------------------------------------------------------
+    #: relative step of the central differences of the cable tangents
+    CABLE_STEP = 1e-4
+
+    def derivative_cost(self, n_modes: int, n_params: int) -> int:
+        """Eigen-solve equivalents of :meth:`modal_derivatives`: one factorization per mode, one of
+        the massless block, and two re-assemblies (OpenSees build + gravity) per parameter."""
+        return int(n_modes) + 1 + 2 * int(n_params)
+
+    def modal_derivatives(
+        self,
+        theta: Mapping[str, float],
+        result: ModalResult | None = None,
+        *,
+        parameters: Sequence[str] | None = None,
+        modes: Sequence[int] | None = None,
+        close_rtol: float = CLOSE_EIGENVALUE_RTOL,
+    ) -> ModalDerivatives:
+        """Derivatives of the deck modes ``modes`` (indices into the ModalResult) by Nelson's method
+        on the full equation space (singular M: massless DOFs).
+
+        dK/dtheta_p = K_p (extracted, exact: the linear elements are linear in their ratio)
+        + B' k_cable(dk3/dtheta_p) B, the change of the cable tangent through the gravity
+        state, by central differences of the ASSEMBLED cable tangents at theta_p +- h
+        (h = CABLE_STEP theta_p; an OpenSees build and gravity analysis each, no eigen
+        solution). Every parameter moves the gravity state (deck stiffness and bearings
+        change the sag), so every parameter gets this term. dM = 0.
+        """
+        op = self.operators
+        names = list(self.parameters.names if parameters is None else parameters)
+        unknown = [n for n in names if n not in self.parameters.names]
+        if unknown:
+            raise KeyError(f"unknown parameter(s) {unknown}; known: {self.parameters.names}")
+        extra = 0
+        if result is None or "eigenvectors" not in result.meta:
+            result, extra = self.modal(theta), 1
+        modes = np.arange(result.n_modes) if modes is None else np.asarray(modes, dtype=int)
+        omega2_all = np.asarray(result.meta["omega2"], float)
+        computed = np.asarray(result.mode_info["model_mode"], dtype=int)[modes] - 1
+        check_separated(omega2_all, computed, close_rtol)
+        values = self._values(theta)
+        k3 = np.asarray(result.meta["cable_tangent"], float)
+        K = op.stiffness(values, k3).tocsc()
+        nm = op.n_master
+        phi_m = np.asarray(result.meta["eigenvectors"], float)[:, modes]
+        try:
+            lu = spla.splu(K[nm:, nm:].tocsc())
+        except RuntimeError as exc:
+            raise ModelEvaluationError("singular_matrix", f"massless block: {exc}") from exc
+        phi = np.vstack([phi_m, -lu.solve(np.asarray(K[nm:, :nm] @ phi_m))])
+        M = sp.diags(np.r_[op.mass, np.zeros(K.shape[0] - nm)]).tocsc()
+        phi = normalize_mass(M, phi)
+        n = K.shape[0]
+        dK_phi = np.empty((n, modes.size, len(names)))
+        for j, name in enumerate(names):
+            h = self.CABLE_STEP * max(1.0, abs(values[name]))
+            dk3 = (self._gravity_state({**values, name: values[name] + h})[1]
+                   - self._gravity_state({**values, name: values[name] - h})[1]) / (2.0 * h)
+            dK = _cable_matrix(op.b_cable, dk3)
+            if name in op.d_param:
+                dK = dK + sp.csr_matrix((op.d_param[name], op.indices, op.indptr), shape=(n, n))
+            dK_phi[:, :, j] = dK @ phi
+        with single_thread_blas():
+            dlam, dphi, n_fact = eigen_derivatives(K, M, omega2_all[computed], phi, dK_phi)
+        return ModalDerivatives(modes, tuple(names), dlam, self._sensor_shapes(dphi[:nm]),
+                                n_fact + 1 + 2 * len(names) + extra)
 
 
 def solve_dense(k: np.ndarray, mass: np.ndarray, omega2_max: float):

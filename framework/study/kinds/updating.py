@@ -4,7 +4,8 @@ A study lists algorithms (each an optimizer with settings, runs and budget overr
 run updates the structure's parameters to the measured modes and predicts the validation
 cases with the updated values. Tables:
 
-- ``runs``: one row per run: structure, algorithm, objective (best Pi), n_evaluations,
+- ``runs``: one row per run: structure, algorithm, objective (best Pi), n_evaluations
+  (model evaluations + eigen-solve equivalents of exact Jacobians), n_jacobians,
   n_iterations, wall_s, status (target, stalled, converged, budget, max_iterations,
   completed, failed, error), error, n_failed_evaluations, failures, message,
   condition_number (SM), every optimizer setting as its own column, and the result columns an
@@ -212,6 +213,7 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
     """One run per algorithm entry and seed; the task holds everything the run needs."""
     data = cfg.model_dump(mode="json")
     common = {k: data[k] for k in ("structure", "measured", "validation", "parameters", "objective")}
+    common["objective"] = effective_objective(common["objective"])
     parts = []
     for label, alg in cfg.algorithms.items():
         settings = settings_model(alg.algorithm).model_validate(alg.settings).model_dump(mode="json")
@@ -224,6 +226,17 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
             parts.append({"label": label, "seed": cfg.seed + i, "task": task, "columns": columns,
                           "relevant": relevant})
     return parts
+
+
+def effective_objective(objective: dict) -> dict:
+    """The objective section as it acts: a formulation that reads no options (``spec``) gets none,
+    so that a study sweeping the formulation and another formulation's options (e.g.
+    ``objective.options.shape_term``) plans each of its runs once (equal tasks, one run id)."""
+    from framework.objectives import get_formulation
+
+    if objective.get("options") and get_formulation(objective["formulation"]).check_options is None:
+        return {**objective, "options": {}}
+    return objective
 
 
 def identity(task: dict) -> dict:
@@ -370,6 +383,7 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
     tables["runs"].append({
         "objective": result.objective,
         "n_evaluations": result.n_evaluations,
+        "n_jacobians": result.n_jacobians,
         "n_iterations": result.n_iterations,
         "wall_s": result.wall_s,
         "status": result.status,
