@@ -15,9 +15,11 @@ Modules, one job each (imports only go down this list, no cycles):
 - :mod:`.modes`: mode classification by kinetic energy, deck-mode selection, pairing by type;
 - :mod:`.fast`: the fast eigen path (OpenSees gravity, numpy/scipy eigen solution);
 - :mod:`.model`: :func:`make_model`, plain or fast path;
+- :mod:`.choices`: the model's modelling choices as table rows (:func:`modelling_choices`);
 - :mod:`.reference`: :func:`measured`, with reference shapes from the initial model.
 """
 
+from framework.models.bridge.choices import modelling_choices
 from framework.models.bridge.data import (
     DESIGN_MODEL_HZ,
     MEASURED_DAMPING,
@@ -48,5 +50,6 @@ __all__ = [
     "make_model",
     "mass_items",
     "measured",
+    "modelling_choices",
     "pair_by_type",
 ]
