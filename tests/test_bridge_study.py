@@ -199,3 +199,22 @@ def test_committed_initial_frequencies_before_and_after_against_the_source():
     assert (freq.loc[[4, 5], "dev_cables_4_pct"].abs() < 7.3).all()
     assert freq["dev_cables_4_pct"].abs().max() < 10.2
     assert freq["dev_cables_4_pct"].abs().max() == pytest.approx(-freq.loc[7, "dev_cables_4_pct"])
+
+
+def test_bridge_study_replication_settings_follow_the_source():
+    """studies/bridge.yaml: SM as the pseudo-inverse iteration from 1.00, 0.92 and 1.11, PSO
+    swarm 20 for exactly 200 generations (no stall stop), 10 runs, SNT for 4 minima with a
+    total budget; our variants are labelled _ours."""
+    cfg = load(ROOT / "studies" / "bridge.yaml")
+    algs = cfg.algorithms
+    pinv = {k: a for k, a in algs.items() if a.settings.get("method") == "pseudo_inverse"}
+    assert sorted(a.settings["start_factor"] for a in pinv.values()) == [0.92, 1.0, 1.11]
+    assert all(not k.endswith("_ours") for k in pinv)
+    assert all(k.endswith("_ours") for k, a in algs.items() if a.settings.get("method") == "trust_region")
+    pso = algs["pso"]
+    assert pso.settings == {"swarm_size": 20, "factor": 0.75}
+    assert pso.budget == {"max_iterations": 200, "stall_tolerance": 0.0} and (pso.runs or cfg.runs) == 10
+    assert cfg.budget.max_evaluations >= 200 * 20 and cfg.budget.target_objective < 1e-3  # 2.7e-3 is the floor
+    snt = algs["snt"]
+    assert snt.settings["n_minima"] == 4 and "max_iterations" not in snt.budget
+    assert snt.budget["max_evaluations"] >= 4 * 200 * 20
