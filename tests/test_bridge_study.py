@@ -149,18 +149,18 @@ def test_sm_starts_are_compared_per_method_and_pso_spread_per_label():
     tables = _fake_runner_tables()
     runs = tables["runs"]
     runs["method"] = ["trust_region", "pseudo_inverse", None, None]
-    runs.loc[runs["label"] == "pso", "label"] = "pso_stall10_ours"
+    runs.loc[runs["label"] == "pso", "label"] = "pso_stall10 (ours)"
     for name in ("parameters", "modes"):
-        tables[name].loc[tables[name]["run_id"] == "r2", "label"] = "pso_stall10_ours"
+        tables[name].loc[tables[name]["run_id"] == "r2", "label"] = "pso_stall10 (ours)"
     out = updating_summary.tables(tables, starts="sm", spread="pso")
     starts = out["sm_starts"].set_index("label")
     assert set(starts["method"]) == {"trust_region", "pseudo_inverse"}
     assert (starts["max_ratio_distance_between_starts"] == 0.0).all()  # one start per method here
     spread = out["pso_spread"]
-    assert set(spread["label"]) == {"pso_stall10_ours"}
+    assert set(spread["label"]) == {"pso_stall10 (ours)"}
     assert "n_evaluations" in set(spread["quantity"])
     by_label = out["updated_modes_by_label"]
-    assert sorted(by_label["label"].unique()) == ["pso_stall10_ours", "sm_0.92", "sm_1.00", "snt"]
+    assert sorted(by_label["label"].unique()) == ["pso_stall10 (ours)", "sm_0.92", "sm_1.00", "snt"]
 
 
 def test_choices_table_comes_from_the_model_and_the_config():
@@ -204,13 +204,13 @@ def test_committed_initial_frequencies_before_and_after_against_the_source():
 def test_bridge_study_replication_settings_follow_the_source():
     """studies/bridge.yaml: SM as the pseudo-inverse iteration from 1.00, 0.92 and 1.11, PSO
     swarm 20 for exactly 200 generations (no stall stop), 10 runs, SNT for 4 minima with a
-    total budget; our variants are labelled _ours."""
+    total budget; our variants are labelled (ours)."""
     cfg = load(ROOT / "studies" / "bridge.yaml")
     algs = cfg.algorithms
     pinv = {k: a for k, a in algs.items() if a.settings.get("method") == "pseudo_inverse"}
     assert sorted(a.settings["start_factor"] for a in pinv.values()) == [0.92, 1.0, 1.11]
-    assert all(not k.endswith("_ours") for k in pinv)
-    assert all(k.endswith("_ours") for k, a in algs.items() if a.settings.get("method") == "trust_region")
+    assert all(not k.endswith(" (ours)") for k in pinv)
+    assert all(k.endswith(" (ours)") for k, a in algs.items() if a.settings.get("method") == "trust_region")
     pso = algs["pso"]
     assert pso.settings == {"swarm_size": 20, "factor": 0.75}
     assert pso.budget == {"max_iterations": 200, "stall_tolerance": 0.0} and (pso.runs or cfg.runs) == 10
