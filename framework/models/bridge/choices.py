@@ -72,7 +72,7 @@ def _section_rows(deck_section: str) -> list[dict[str, str]]:
              "not given (SPEC 6: derive from the section); sum of the items above"),
         _row("deck mass moment of inertia", f"{ix:.1f} kg m^2/m about the deck axis (composite centroid)", OURS,
              "sum of m (y^2 + z^2) + own inertia over the items; the mass centroid's 0.08 m offset from the axis "
-             "(lateral-torsional mass coupling, S^2/(m I_x) = 0.009) is neglected"),
+             "(lateral-torsional mass coupling, S^2/(m I_x) = 0.010) is neglected"),
         _row("deck axial area", f"{deck_area_m2(deck_section):.4f} m^2 (transformed to steel)", OURS,
              "from the section reading; only the axial stiffness depends on it"),
     ]
