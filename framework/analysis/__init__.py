@@ -34,6 +34,7 @@ ANALYSES: dict[str, str] = {
     "sensitivity": "framework.analysis.sensitivity",
     "modes": "framework.analysis.modes",
     "updating_summary": "framework.analysis.updating_summary",
+    "choices": "framework.analysis.choices",
 }
 
 

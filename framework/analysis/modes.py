@@ -3,7 +3,12 @@
 Asked for with ``report: {modes: {references: [design_model_hz]}}``. Table:
 
 - ``mode_summary``: variant x point x case x pairing: modes, matched modes, max
-  |error_pct| over the matched modes, min MAC, the unmatched measured modes.
+  |error_pct| over the matched modes, min MAC, the unmatched measured modes;
+- ``frequencies``: the numbers of ``frequencies.png`` (base case, pairing
+  ``frequency_pairing``, point ``point``): one row per measured mode with the measured
+  frequency, the data's reference frequencies, and per variant the model's frequency
+  ``f_<variant>_hz``, its error against the measured one ``error_<variant>_pct`` and, when
+  there is a reference, its deviation from the first reference ``dev_<variant>_pct``.
 
 Figures (base case):
 
@@ -41,23 +46,54 @@ def summary(modes: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def tables(tables: dict[str, pd.DataFrame], **_) -> dict[str, pd.DataFrame]:
+def _base(modes: pd.DataFrame, pairing: str, point: str) -> pd.DataFrame:
+    return modes[(modes["pairing"] == pairing) & (modes["label"] == point) & (modes["case"] == "base")
+                 & (modes["mode"] > 0)]
+
+
+def _references(df: pd.DataFrame, references: list[str] | None) -> list[str]:
+    if references is not None:
+        return list(references)
+    return [c for c in df.columns if c.endswith("_hz") and c not in MODEL_COLUMNS and df[c].notna().any()]
+
+
+def frequency_table(modes: pd.DataFrame, pairing: str, point: str, references: list[str] | None) -> pd.DataFrame:
+    df = _base(modes, pairing, point)
+    if df.empty:
+        return df
+    first = df[df["variant"] == df["variant"].iloc[0]]
+    refs = _references(df, references)
+    keep = [c for c in ("mode", "mode_label", "measured_type", "f_measured_hz") if c in first] + refs
+    out = first[keep].reset_index(drop=True)
+    for variant, g in df.groupby("variant", sort=False):
+        f = g["f_model_hz"].to_numpy(float)
+        out[f"f_{variant}_hz"] = f
+        out[f"error_{variant}_pct"] = 100.0 * (f / out["f_measured_hz"].to_numpy(float) - 1.0)
+        if refs:
+            out[f"dev_{variant}_pct"] = 100.0 * (f / out[refs[0]].to_numpy(float) - 1.0)
+    return out
+
+
+def tables(tables: dict[str, pd.DataFrame], frequency_pairing: str | None = None, point: str = "initial",
+           references: list[str] | None = None, **_) -> dict[str, pd.DataFrame]:
     modes = tables.get("modes")
     if modes is None or modes.empty or "pairing" not in modes:
         return {}
-    return {"mode_summary": summary(modes)}
+    out = {"mode_summary": summary(modes)}
+    freq = frequency_table(modes, frequency_pairing or str(modes["pairing"].iloc[0]), point, references)
+    if not freq.empty:
+        out["frequencies"] = freq
+    return out
 
 
 def plot_frequencies(modes: pd.DataFrame, path: Path, pairing: str, point: str, references: list[str] | None) -> bool:
     import matplotlib.pyplot as plt
 
-    df = modes[(modes["pairing"] == pairing) & (modes["label"] == point) & (modes["case"] == "base")
-               & (modes["mode"] > 0)]
+    df = _base(modes, pairing, point)
     if df.empty:
         return False
     first = df[df["variant"] == df["variant"].iloc[0]]
-    if references is None:
-        references = [c for c in df.columns if c.endswith("_hz") and c not in MODEL_COLUMNS and df[c].notna().any()]
+    references = _references(df, references)
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     ax.plot(first["mode"], first["f_measured_hz"], "ko", label="measured")
     for ref in references:

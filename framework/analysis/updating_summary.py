@@ -4,18 +4,22 @@ from its tables only.
 Asked for with ``report: {updating_summary: {starts: sm, spread: pso}}``. Tables:
 
 - ``<starts>_starts`` (``sm_starts``): the runs of algorithm ``starts`` (e.g. SM from
-  several start factors): ratio of every parameter, objective, evaluations, condition
-  number, status, and ``max_ratio_distance_between_starts`` = max_j (max - min over runs
-  of ratio_j): near 0 when every start reaches the same point;
-- ``<spread>_spread`` (``pso_spread``): count, mean, std, min, quartiles and max over the
-  runs of algorithm ``spread`` of every parameter ratio and of the objective;
+  several start factors): ratio of every parameter, objective, evaluations, iterations,
+  condition number, status, and ``max_ratio_distance_between_starts`` = max_j (max - min
+  over runs of ratio_j): near 0 when every start reaches the same point; per ``method``
+  when the runs have that setting (SM's trust region and pseudo-inverse iteration);
+- ``<spread>_spread`` (``pso_spread``): per label of algorithm ``spread`` (e.g. the
+  source's 200 generations and a stall-rule variant), count, mean, std, min, quartiles
+  and max over the runs of every parameter ratio, of the objective, and of the
+  evaluations and iterations;
 - ``snt_minima``: the minima of every run that reports them (SNT): parameter ratios, raw
   and derated objective, ``artefact_of_niche_radius`` (the optimizer's flag), distances
   to the earlier minima, the niche radius r, and ``on_niche_boundary``: the nearest
   earlier minimum lies at r within 1 %. The derating G(d) = (d / r)^m is 1 from d = r on,
   so the derated surface has a rim there: a minimum on the rim is an artefact even when
   its raw and derated values agree;
-- ``updated_modes_best_run``: the base-case modes of the run with the lowest objective.
+- ``updated_modes_best_run``: the base-case modes of the run with the lowest objective;
+- ``updated_modes_by_label``: the base-case modes of the best run of every label.
 
 Figures: ``updated_ratios.png`` (ratio per parameter, one point per run, by algorithm),
 ``updated_errors.png`` (frequency error per mode, one point per run, lines at
@@ -43,8 +47,8 @@ def _ratios(runs: pd.DataFrame, parameters: pd.DataFrame) -> tuple[pd.DataFrame,
     """One row per run with the ratio of every parameter as a column."""
     names = list(dict.fromkeys(parameters["parameter"]))
     wide = parameters.pivot_table(index="run_id", columns="parameter", values="ratio")[names].reset_index()
-    keep = [c for c in ("run_id", "label", "algorithm", "seed", "objective", "n_evaluations", "condition_number",
-                        "status") if c in runs]
+    keep = [c for c in ("run_id", "label", "algorithm", "method", "seed", "objective", "n_evaluations",
+                        "n_iterations", "condition_number", "status") if c in runs]
     return runs[keep].merge(wide, on="run_id"), names
 
 
@@ -52,14 +56,20 @@ def starts_table(wide: pd.DataFrame, names: list[str], algorithm: str) -> pd.Dat
     sel = wide[wide["algorithm"] == algorithm].sort_values(["label", "seed"]).reset_index(drop=True)
     if sel.empty:
         return sel
-    return sel.assign(max_ratio_distance_between_starts=float(np.max(np.ptp(sel[names].to_numpy(float), axis=0))))
+    groups = sel["method"].fillna("") if "method" in sel else pd.Series("", index=sel.index)
+    distance = {g: float(np.max(np.ptp(sel.loc[groups == g, names].to_numpy(float), axis=0))) for g in groups.unique()}
+    return sel.assign(max_ratio_distance_between_starts=groups.map(distance))
 
 
 def spread_table(wide: pd.DataFrame, names: list[str], algorithm: str) -> pd.DataFrame:
     sel = wide[wide["algorithm"] == algorithm]
     if sel.empty:
         return pd.DataFrame()
-    return sel[names + ["objective"]].describe().T.reset_index(names="quantity")
+    counts = [c for c in ("n_evaluations", "n_iterations") if c in sel]
+    parts = [g[names + ["objective"] + counts].astype(float).describe().T.reset_index(names="quantity")
+             .assign(label=label) for label, g in sel.groupby("label", sort=True)]
+    out = pd.concat(parts, ignore_index=True)
+    return out[["label"] + [c for c in out.columns if c != "label"]]
 
 
 def _order(run_params: pd.DataFrame, best_x: list[float], given: list[str] | None) -> list[str]:
@@ -119,6 +129,9 @@ def tables(tables: dict[str, pd.DataFrame], starts: str = "sm", spread: str = "p
         best = ok.loc[ok["objective"].idxmin(), "run_id"]
         out["updated_modes_best_run"] = modes[(modes["run_id"] == best) & (modes["case"] == "base")].reset_index(
             drop=True)
+        best_of = ok.loc[ok.groupby("label")["objective"].idxmin(), "run_id"]
+        out["updated_modes_by_label"] = modes[modes["run_id"].isin(best_of) & (modes["case"] == "base")].sort_values(
+            ["label", "mode"]).reset_index(drop=True)
     return {k: v for k, v in out.items() if not v.empty}
 
 

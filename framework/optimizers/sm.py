@@ -31,6 +31,15 @@ evaluation); "failed" is left to runs without any successful evaluation.
 Starts: "initial" (the initial model), "random" (uniform in the box from the run's
 generator), ``start_factor`` times the initial values (e.g. 0.92, 1.11), or an explicit
 normalized point ``x0`` (e.g. to polish the result of a global search).
+
+``method``: "trust_region" (default, above: ours) or "pseudo_inverse", the source's
+iteration (SPEC 4; :func:`run_pseudo_inverse`): per iteration the residual at P_k and S by
+one-sided differences (n + 1 model runs, evaluated as one batch), then the full step
+P_k+1 = P_k - S^+ r(P_k) (r = R_a - R_e), with no trust region, step control or line
+search ("unbounded within each step"). The problem evaluates only inside the updating
+bounds, so the new point is projected onto them (clipped, normalized [0, 1]) after the step.
+Converged when the projected step is below ``step_tolerance`` in every normalized
+coordinate; the shared termination rule and the budget apply per iteration.
 """
 
 from __future__ import annotations
@@ -44,6 +53,7 @@ from framework.optimizers.base import Budget, BudgetExhausted, Outcome, Settings
 
 
 class SMSettings(Settings):
+    method: Literal["trust_region", "pseudo_inverse"] = "trust_region"
     start: Literal["initial", "random"] = "initial"
     start_factor: float | None = Field(None, gt=0)
     x0: list[float] | None = None  # explicit start in normalized coordinates (e.g. to polish a GA/PSO result)
@@ -52,6 +62,9 @@ class SMSettings(Settings):
     xtol: float = Field(1e-10, gt=0)
     gtol: float = Field(1e-10, gt=0)
     jacobian: Literal["auto", "exact", "fd"] = "auto"
+    # pseudo-inverse iteration only: convergence on the projected step (normalized), pinv cut-off
+    step_tolerance: float = Field(1e-6, gt=0)
+    pinv_rcond: float = Field(1e-12, gt=0, lt=1)
 
     @field_validator("x0", mode="before")
     @classmethod
@@ -107,6 +120,8 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     from scipy.optimize import least_squares
 
     s = SMSettings(**settings)
+    if s.method == "pseudo_inverse":
+        return run_pseudo_inverse(evaluator, seed, budget, s)
     x0 = start_point(evaluator, seed, s)
     termination = Termination(budget, evaluator)
 
@@ -160,3 +175,75 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         extra["jacobian_methods"] = dict(evaluator.jacobian_methods)
         extra["jacobian_equivalents"] = evaluator.jacobian_equivalents
     return Outcome(status, n_iter, message=message, extra=extra)
+
+
+# ---- the source's pseudo-inverse iteration -------------------------------------------------
+def difference_points(x: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """The n + 1 points of a one-sided difference Jacobian at x in [0, 1]^n and the signed
+    steps: x + h e_j, or x - h e_j where x + h e_j would leave the box."""
+    h = np.where(x + step <= 1.0, step, -step)
+    return np.vstack([x, x + np.diag(h)]), h
+
+
+def pseudo_inverse_step(jac: np.ndarray, r: np.ndarray, rcond: float) -> np.ndarray:
+    """Gauss-Newton step of the linearized residual r + J dx = 0: dx = -J^+ r (minimum norm)."""
+    return -np.linalg.pinv(jac, rcond=rcond) @ r
+
+
+def run_pseudo_inverse(evaluator, seed: int, budget: Budget, s: SMSettings) -> Outcome:
+    """P_k+1 = clip(P_k - S^+ r(P_k)) until the projected step is below ``s.step_tolerance``.
+
+    Each iteration evaluates P_k and its n difference points in one batch (n + 1 model
+    runs). Stops as "converged", by the shared termination rule, on the budget, or
+    "not_converged" when P_k or a difference point fails. The final point is the last
+    evaluated iterate (the method's answer; with a parameter held on a bound it is a fixed
+    point of the projected iteration, which need not be the best point visited). extra:
+    start, per iteration Pi, step norm and the parameters clipped by the projection, the
+    best iterate, condition number and singular values of the last S.
+    """
+    x = start_point(evaluator, seed, s)
+    termination = Termination(budget, evaluator)
+    n = evaluator.n_params
+    extra: dict = {"x_start": x.tolist(), "theta_start": evaluator.parameters.to_physical(x).tolist(),
+                   "iterations": []}
+    last_x, last_pi, best_pi = None, np.inf, np.inf
+    status, message, jac = "budget", "evaluation budget exhausted", None
+    iteration = 0
+    while evaluator.affords(n + 1):
+        points, h = difference_points(x, s.diff_step)
+        ev = evaluator.evaluate(points)
+        iteration += 1
+        if not np.all(ev.ok):
+            failed = "the iterate" if not ev.ok[0] else "a difference point"
+            reason = ev.reasons[int(np.argmin(ev.ok))]
+            status, message = "not_converged", f"{failed} failed at iteration {iteration}: {reason}"
+            break
+        r = ev.residuals[0]
+        pi = float(ev.objective[0])
+        last_x, last_pi = x.copy(), pi
+        if pi < best_pi:
+            best_pi = pi
+            extra["best_iterate"] = {"iteration": iteration, "objective": pi, "x": x.tolist()}
+        jac = (ev.residuals[1:] - r).T / h
+        unclipped = x + pseudo_inverse_step(jac, r, s.pinv_rcond)
+        x_new = np.clip(unclipped, 0.0, 1.0)
+        step = x_new - x
+        clipped = [evaluator.parameters.names[j] for j in np.flatnonzero(x_new != unclipped)]
+        extra["iterations"].append({"iteration": iteration, "objective": pi, "max_step": float(np.abs(step).max()),
+                                    "clipped": clipped})
+        if np.abs(step).max() < s.step_tolerance:
+            status, message = "converged", f"projected step below {s.step_tolerance:g} after {iteration} iterations"
+            break
+        if termination.update(pi):
+            status, message = termination.reason, f"termination rule: {termination.reason}"
+            break
+        x = x_new
+    if jac is not None and np.all(np.isfinite(jac)):
+        sv = np.linalg.svd(jac, compute_uv=False)
+        extra["condition_number"] = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
+        extra["singular_values"] = sv.tolist()
+    extra["final_clipped"] = extra["iterations"][-1]["clipped"] if extra["iterations"] else []
+    if status == "converged" and budget.target_objective is not None and last_pi < budget.target_objective:
+        status = "target"
+    return Outcome(status, iteration, message=message, extra=extra, x_best=last_x,
+                   objective=last_pi if last_x is not None else None)

@@ -6,7 +6,8 @@ the measured modes; the structure is registered as ``bridge`` in
 
 Modules, one job each (imports only go down this list, no cycles):
 
-- :mod:`.geometry`: dimensions, sections, bearings, masses, node numbering, sensor DOFs,
+- :mod:`.section`: the deck's cross-section readings, their composite constants and masses;
+- :mod:`.geometry`: dimensions, member sections, bearings, node numbering, sensor DOFs,
   :class:`~.geometry.BridgeInfo`;
 - :mod:`.parameters`: the six updating parameters (ratios, bounds 0.6-1.3);
 - :mod:`.data`: published values (measured and design-model frequencies, damping, labels);
@@ -14,9 +15,11 @@ Modules, one job each (imports only go down this list, no cycles):
 - :mod:`.modes`: mode classification by kinetic energy, deck-mode selection, pairing by type;
 - :mod:`.fast`: the fast eigen path (OpenSees gravity, numpy/scipy eigen solution);
 - :mod:`.model`: :func:`make_model`, plain or fast path;
+- :mod:`.choices`: the model's modelling choices as table rows (:func:`modelling_choices`);
 - :mod:`.reference`: :func:`measured`, with reference shapes from the initial model.
 """
 
+from framework.models.bridge.choices import modelling_choices
 from framework.models.bridge.data import (
     DESIGN_MODEL_HZ,
     MEASURED_DAMPING,
@@ -25,11 +28,12 @@ from framework.models.bridge.data import (
     MEASURED_PEAK_HZ,
     MEASURED_TYPES,
 )
-from framework.models.bridge.geometry import DESIGN_TENSION_N, deck_mass_per_m
+from framework.models.bridge.geometry import DESIGN_TENSION_N
 from framework.models.bridge.model import make_model
 from framework.models.bridge.modes import pair_by_type
 from framework.models.bridge.parameters import PARAMETER_NAMES, bridge_parameters
 from framework.models.bridge.reference import measured
+from framework.models.bridge.section import composite_constants, deck_mass_per_m, mass_items
 
 __all__ = [
     "DESIGN_MODEL_HZ",
@@ -41,8 +45,11 @@ __all__ = [
     "MEASURED_TYPES",
     "PARAMETER_NAMES",
     "bridge_parameters",
+    "composite_constants",
     "deck_mass_per_m",
     "make_model",
+    "mass_items",
     "measured",
+    "modelling_choices",
     "pair_by_type",
 ]

@@ -5,7 +5,8 @@ Model (run through :class:`~framework.models.opensees.OpenSeesModel`, see
 
 - deck: 48 ``elasticBeamColumn`` elements (Linear transformation) on the spine, fully
   composite section transformed to steel (E = 200 GPa, G = 77 GPa): I = 0.00439 m^4
-  (vertical bending, local y), 0.06140 m^4 (lateral bending, local z), J = 0.00810 m^4;
+  (vertical bending, local y), 0.06140 m^4 (lateral bending, local z), J = 0.00810 m^4
+  (given); area from the section reading (:mod:`.section`, 0.125 m^2);
   cable anchors and sensor points on both edges are ``rigidLink('beam')`` slaves of the
   spine nodes;
 - pylon: 40 ``elasticBeamColumn`` elements: two inclined 400WC328 legs of 18 elements each
@@ -21,9 +22,11 @@ Model (run through :class:`~framework.models.opensees.OpenSeesModel`, see
 - bearings: ``zeroLength`` springs between the spine and ground (abutments) or the
   crossbeam (pylon): longitudinal = shear stiffness, vertical, torsional (SPEC values, per
   support line), lateral = see ``lateral_restraint``; rotations about y and z are free;
-- masses: from the section (:data:`.geometry.DECK_MASS_ITEMS`, 1462 kg/m, rotational inertia
-  873 kg m^2/m about the spine), lumped at the spine nodes; pylon 328 kg/m; no mass on
-  constrained (rigid-link) nodes; rotational inertia only about the deck axis;
+- masses: from the section (:func:`.section.deck_mass_per_m`: 1618 kg/m and 1036 kg m^2/m
+  about the spine for the default reading), lumped at the spine nodes; pylon 328 kg/m; no
+  mass on constrained (rigid-link) nodes; rotational inertia only about the deck axis (the
+  mass centroid lies 0.08 m above the spine: the lateral-torsional mass coupling,
+  (S^2 / (m I_x)) = 0.010, is neglected);
 - gravity: nodal loads m g, one-step Newton (UmfPack) on the corotational model
   (:data:`GRAVITY`); the eigen solution follows on the deformed, stressed state (plain
   path: OpenSees default solver, ~100 modes; fast path: :mod:`.fast`), and the modes are
@@ -33,14 +36,20 @@ Options of :func:`build_bridge` (validated by :func:`check_options`):
 
 - ``cable_elements`` (1, 2, 4, 8; default 4): elements per cable. One element loses the
   2nd vertical mode (deck-cable coupled, cables swinging laterally).
-- ``lateral_restraint`` ("guided" default | "shear"): lateral stiffness of the bearings.
-  With "shear" (k_y = shear stiffness) the deck sways as a rigid body at about 1.3 Hz, far
-  below the measured lateral modes (4.86, 5.33 Hz), so the bearings must be laterally
-  guided: "guided" uses k_y = vertical stiffness (steel guides / shear keys, stiff as the
-  bearing in compression).
+- ``lateral_restraint`` ("rigid" default | "guided" | "shear"): lateral stiffness of the
+  bearings (:func:`lateral_stiffness`). The pivot bearings at the pylon hold the deck in
+  plan and the sliding bearings at the abutments are guided: the lateral restraint is
+  steel on steel, so "rigid" (RIGID_FACTOR x the vertical stiffness, not scaled by
+  K_bearing). "guided" (k_y = vertical stiffness x K_bearing: guides as stiff as the
+  elastomer in compression) was the default before issue 15; with "shear" (the
+  elastomer's shear stiffness) the deck sways as a rigid body at about 1.3 Hz, far below
+  any measured lateral mode.
+- ``deck_section`` ("steel_overhangs" default | "slab_overhangs"): the reading of the deck
+  section that gives the deck's area, mass and mass moment of inertia (:mod:`.section`);
+  "slab_overhangs" is the estimate before issue 15.
 - ``tensions`` ("installed" default | "final"): "installed" applies 55/95/75 kN as the
   initial strain before gravity (the deck weight then raises them); "final" iterates the
-  initial strain (``final_iterations`` outer gravity runs) until the dead-load tensions
+  initial strain (outer gravity runs, at most ``final_iterations``) until the dead-load tensions
   equal 55/95/75 kN. See docs/bridge.md for the comparison.
 """
 
@@ -60,15 +69,12 @@ from framework.models.bridge.geometry import (
     CABLE_MASS_KG_PER_M,
     CABLE_NODE0,
     CROSSBEAM,
-    DECK_AREA_M2,
     DECK_I_LATERAL_M4,
     DECK_I_VERTICAL_M4,
     DECK_J_M4,
     DECK_LENGTH_M,
     DESIGN_TENSION_N,
     E_CABLE_PA,
-    E_STEEL_PA,
-    G_STEEL_PA,
     GROUND_NODE0,
     LEG,
     N_DECK_ELEMENTS,
@@ -82,25 +88,44 @@ from framework.models.bridge.geometry import (
     STRUT,
     STRUT_LEVEL,
     BridgeInfo,
-    deck_mass_per_m,
     deck_node,
     sensor_dofs,
     sensor_offsets,
     sensor_points,
 )
+from framework.models.bridge.section import E_STEEL_PA, G_STEEL_PA, SECTIONS, deck_area_m2, deck_mass_per_m
 from framework.models.opensees import GravityAnalysis, ops_module, run_static
 
 GRAVITY_M_PER_S2 = 9.81
 
 
-def check_options(cable_elements: int, lateral_restraint: str, tensions: str) -> None:
+LATERAL_RESTRAINTS = ("rigid", "guided", "shear")
+#: lateral stiffness of a "rigid" restraint: this factor times the support line's vertical
+#: stiffness (1.6e11 N/m at the abutments, 7.7e10 N/m at the pylon): ten times stiffer
+#: changes no frequency by more than 2e-4 relative
+RIGID_FACTOR = 1000.0
+
+
+def check_options(cable_elements: int, lateral_restraint: str, tensions: str, deck_section: str = SECTIONS[0]) -> None:
     """Raise :class:`InputError` naming the option for a value outside its allowed set."""
     if cable_elements not in (1, 2, 4, 8):
         raise InputError(f"bridge option cable_elements must be 1, 2, 4 or 8, got {cable_elements!r}")
-    if lateral_restraint not in ("guided", "shear"):
-        raise InputError(f"bridge option lateral_restraint must be 'guided' or 'shear', got {lateral_restraint!r}")
+    if lateral_restraint not in LATERAL_RESTRAINTS:
+        raise InputError(f"bridge option lateral_restraint must be one of {list(LATERAL_RESTRAINTS)}, "
+                         f"got {lateral_restraint!r}")
     if tensions not in ("installed", "final"):
         raise InputError(f"bridge option tensions must be 'installed' or 'final', got {tensions!r}")
+    if deck_section not in SECTIONS:
+        raise InputError(f"bridge option deck_section must be one of {list(SECTIONS)}, got {deck_section!r}")
+
+
+def lateral_stiffness(bearing: Mapping[str, float], restraint: str, k_bearing: float) -> float:
+    """Lateral spring (N/m) of a support line: "rigid" (RIGID_FACTOR x vertical, not scaled by
+    K_bearing: a steel guide, not the elastomer), "guided" (the vertical stiffness, scaled by
+    K_bearing) or "shear" (the elastomer's shear stiffness, scaled by K_bearing)."""
+    if restraint == "rigid":
+        return RIGID_FACTOR * bearing["vertical"]
+    return k_bearing * (bearing["vertical"] if restraint == "guided" else bearing["shear"])
 
 
 def _cable_group_strains(ea_n: float, tensions: Mapping[str, float]) -> dict[str, float]:
@@ -118,19 +143,23 @@ def build_bridge(
     values: Mapping[str, float],
     *,
     cable_elements: int = 4,
-    lateral_restraint: str = "guided",
+    lateral_restraint: str = "rigid",
     tensions: str = "installed",
-    final_iterations: int = 3,
+    deck_section: str = SECTIONS[0],
+    final_iterations: int = 20,
     initial_strain: Mapping[str, float] | None = None,
 ) -> BridgeInfo:
     """Create the bridge in the OpenSees domain for parameter ratios ``values``.
 
     With ``tensions="final"`` the initial strain of each cable group is corrected by
-    eps0 <- eps0 + (T_target - T) / (E A) over ``final_iterations`` gravity runs (each
-    rebuilding the domain) before the final build; the mean axial force over each group's
-    elements is its tension T.
+    eps0 <- eps0 + (T_target - T) / (E A) in gravity runs (each rebuilding the domain)
+    until every group's tension T is within ``FINAL_TOLERANCE`` of its target or after
+    ``final_iterations`` runs, then built once more; the mean axial force over a group's
+    elements is its tension T. The structure relaxes about three quarters of each correction,
+    so the error falls by only about a quarter per run.
     """
-    check_options(cable_elements, lateral_restraint, tensions)
+    check_options(cable_elements, lateral_restraint, tensions, deck_section)
+    options = {"cable_elements": cable_elements, "lateral_restraint": lateral_restraint, "deck_section": deck_section}
     ops = ops_module()
     ea_n = E_CABLE_PA * float(values["K_cable"]) * CABLE_AREA_M2
     target = _target_tensions(values)
@@ -138,13 +167,18 @@ def build_bridge(
     if tensions == "final" and initial_strain is None:
         for _ in range(final_iterations):
             ops.wipe()
-            info = _build(ops, values, cable_elements, lateral_restraint, eps, target)
+            info = _build(ops, values, options, eps, target)
             run_static(ops, GRAVITY)
             force = cable_tensions(ops, info)
+            if max(abs(force[g] / target[g] - 1.0) for g in eps) <= FINAL_TOLERANCE:
+                break
             eps = {g: eps[g] + (target[g] - force[g]) / ea_n for g in eps}
         ops.wipe()
-    return _build(ops, values, cable_elements, lateral_restraint, eps, target)
+    return _build(ops, values, options, eps, target)
 
+
+#: relative tolerance of the dead-load tensions with ``tensions="final"``
+FINAL_TOLERANCE = 0.005
 
 #: the gravity analysis used by every bridge evaluation (one Newton step, UmfPack)
 GRAVITY = GravityAnalysis(steps=1, tolerance=1e-9, max_iterations=30, system="UmfPack", numberer="RCM")
@@ -166,13 +200,15 @@ def cable_tensions_from(forces: np.ndarray, info: BridgeInfo) -> dict[str, float
     return out
 
 
-def _build(ops, values, cable_elements, lateral_restraint, eps, target) -> BridgeInfo:
+def _build(ops, values, options, eps, target) -> BridgeInfo:
+    cable_elements = options["cable_elements"]
     ky = float(values["K_y_deck"])
     kx = float(values["K_x_deck"])
     kt = float(values["K_t_deck"])
     kb = float(values["K_bearing"])
     kc = float(values["K_cable"])
-    m_deck, ix_deck = deck_mass_per_m()
+    m_deck, ix_deck = deck_mass_per_m(options["deck_section"])
+    deck_area = deck_area_m2(options["deck_section"])
     masses: dict[int, list[float]] = {}
 
     def add_mass(node: int, m: float, ndf: int, rx: float = 0.0) -> None:
@@ -197,7 +233,7 @@ def _build(ops, values, cable_elements, lateral_restraint, eps, target) -> Bridg
             1 + i,
             deck_nodes[i],
             deck_nodes[i + 1],
-            DECK_AREA_M2,
+            deck_area,
             E_STEEL_PA,
             G_STEEL_PA,
             DECK_J_M4 * kt,
@@ -291,11 +327,11 @@ def _build(ops, values, cable_elements, lateral_restraint, eps, target) -> Bridg
             ops.node(base_n, *ops.nodeCoord(deck_n))
             ops.fix(base_n, 1, 1, 1, 1, 1, 1)
         b = BEARINGS[kind]
-        lateral = b["vertical"] if lateral_restraint == "guided" else b["shear"]
-        stiff = (b["shear"], lateral, b["vertical"], b["torsion"])
+        lateral = lateral_stiffness(b, options["lateral_restraint"], kb)
+        stiff = (b["shear"] * kb, lateral, b["vertical"] * kb, b["torsion"] * kb)
         mats = []
         for k in stiff:
-            ops.uniaxialMaterial("Elastic", mat, k * kb)
+            ops.uniaxialMaterial("Elastic", mat, k)
             mats.append(mat)
             mat += 1
         ops.element("zeroLength", etag, base_n, deck_n, "-mat", *mats, "-dir", 1, 2, 3, 4)

@@ -1,19 +1,26 @@
-"""Geometry, sections and masses of the cable-stayed footbridge (SPEC section 6).
+"""Geometry, member sections and bearings of the cable-stayed footbridge (SPEC section 6).
 
 Structure: 59.5 m continuous steel-box deck over two 29.75 m spans, a central A-shaped
 steel pylon 22.4 m high and six pairs of stays (12 cables, 32 mm) anchored ~8 m apart on
 both deck edges and at the pylon apex. Axes: x along the bridge (0 at the north abutment,
 pylon at 29.75 m), y transverse, z up; deck centroid (spine) at z = 0. SI units (m, Pa, kg).
 
-Also the node numbering of the OpenSees model, the 36 measured (sensor) DOFs and
-:class:`BridgeInfo`, the record of what :func:`~framework.models.bridge.build.build_bridge`
-created.
+The deck's cross-section, its area and masses are in :mod:`.section`. Also the node
+numbering of the OpenSees model, the 36 measured (sensor) DOFs and :class:`BridgeInfo`,
+the record of what :func:`~framework.models.bridge.build.build_bridge` created.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+
+from framework.models.bridge.section import (
+    GIVEN_I_LATERAL_M4,
+    GIVEN_I_VERTICAL_M4,
+    GIVEN_J_M4,
+    RHO_STEEL_KG_PER_M3,
+)
 
 # --- geometry ----------------------------------------------------------------------
 DECK_LENGTH_M = 59.5
@@ -33,14 +40,12 @@ ANCHOR_OFFSETS = {"Cab-3": 6, "Cab-2": 13, "Cab-1": 19}
 SENSOR_NODES = (6, 12, 18, 21, 24, 27, 30, 36, 42)
 
 # --- materials and sections --------------------------------------------------------
-E_STEEL_PA = 200e9
-G_STEEL_PA = 77e9
 E_CABLE_PA = 165e9
-RHO_STEEL_KG_PER_M3 = 7850.0
-DECK_AREA_M2 = 0.108  # transformed to steel
-DECK_I_VERTICAL_M4 = 0.00439
-DECK_I_LATERAL_M4 = 0.06140
-DECK_J_M4 = 0.00810
+#: the given fully composite deck section, transformed to steel (SPEC 6); the deck's area
+#: and masses follow from our reading of the section (:mod:`.section`)
+DECK_I_VERTICAL_M4 = GIVEN_I_VERTICAL_M4
+DECK_I_LATERAL_M4 = GIVEN_I_LATERAL_M4
+DECK_J_M4 = GIVEN_J_M4
 #: 400WC328 legs, strong axis (local z) bending in the plane of the A-frame
 LEG = {"A": 0.0418, "Iy": 0.48e-3, "Iz": 1.97e-3, "J": 1.8e-5, "mass": 328.0}
 #: crossbeam at deck level carrying the pivot bearings: also 400WC328
@@ -52,38 +57,13 @@ CABLE_AREA_M2 = math.pi * CABLE_DIAMETER_M**2 / 4.0
 CABLE_MASS_KG_PER_M = RHO_STEEL_KG_PER_M3 * CABLE_AREA_M2
 DESIGN_TENSION_N = {"Cab-1": 55e3, "Cab-2": 95e3, "Cab-3": 75e3}
 
-#: bearing springs per support line (two bearings together)
+#: bearing springs per support line (two bearings 450 mm apart together): shear (longitudinal),
+#: vertical, torsional (SPEC 6; K_rot = k_bearing L^2 / 2 with k_bearing = vertical / 2, L = 0.45 m
+#: at the pylon)
 BEARINGS = {
     "abutment": {"shear": 2.58e6, "vertical": 1.60e8, "torsion": 8.86e8},
     "pylon": {"shear": 1.86e6, "vertical": 7.70e7, "torsion": 3.90e6},
 }
-
-#: Deck mass estimate per metre: (item, kg/m, y of centroid m, z of centroid m, own r^2 m^2).
-#: Steel box: trapezoid 1.40 m top, 0.90 m bottom, 0.47 m deep, 16 mm plates
-#: (perimeter 3.364 m -> 0.0538 m^2); 10 % for diaphragms and stiffeners; concrete slab
-#: 2.20 m x 0.13 m between the pipes at 2500 kg/m^3; pipes 250x150x9 (6876 mm^2 each);
-#: grout fills each pipe's void around a 100 mm duct (22770 mm^2 each, 2300 kg/m^3);
-#: railings 1.4 m high, 35 kg/m per side. Items on both edges are listed once with their
-#: total mass and |y|.
-DECK_MASS_ITEMS = (
-    ("steel box", 422.5, 0.0, -0.25, 0.20),
-    ("diaphragms, stiffeners", 42.2, 0.0, -0.25, 0.20),
-    ("concrete slab", 715.0, 0.0, 0.06, 2.20**2 / 12.0),
-    ("edge pipes", 108.0, ANCHOR_Y_M, 0.0, 0.005),
-    ("grout in pipes", 104.8, ANCHOR_Y_M, 0.0, 0.003),
-    ("railings", 70.0, 1.25, 0.80, 0.16),
-)
-
-
-def deck_mass_per_m() -> tuple[float, float]:
-    """Deck mass (kg/m) and mass moment of inertia about the spine (kg m^2/m).
-
-    m = sum m_i; I_x = sum m_i (y_i^2 + z_i^2 + r_i^2) over :data:`DECK_MASS_ITEMS`.
-    """
-    m = sum(item[1] for item in DECK_MASS_ITEMS)
-    ix = sum(item[1] * (item[2] ** 2 + item[3] ** 2 + item[4]) for item in DECK_MASS_ITEMS)
-    return m, ix
-
 
 # --- node numbering ----------------------------------------------------------------
 DECK_NODE0 = 1  # deck spine nodes 1..49

@@ -4,7 +4,7 @@ Evaluation paths: ``make_model(fast=False)`` is the plain :class:`OpenSeesModel`
 ``fast=True`` (default) is :class:`~framework.models.bridge.fast.BridgeFastModel`, same
 build and gravity, own eigen solution (~12x faster, same modes to ~1e-10).
 
-Options: ``cable_elements``, ``lateral_restraint``, ``tensions`` of the build (see
+Options: ``cable_elements``, ``lateral_restraint``, ``tensions``, ``deck_section`` of the build (see
 :mod:`framework.models.bridge.build`), ``n_modes`` of the plain eigen solution, and the
 deck-mode selection shared by both paths:
 
@@ -49,8 +49,9 @@ def make_model(
     cable_elements: int = 4,
     fast: bool = True,
     *,
-    lateral_restraint: str = "guided",
+    lateral_restraint: str = "rigid",
     tensions: str = "installed",
+    deck_section: str = "steel_overhangs",
     deck_energy_min: float = 0.1,
     f_max_hz: float = F_MAX_HZ,
     n_modes: int | None = None,
@@ -60,9 +61,13 @@ def make_model(
     Both return only deck modes (deck kinetic-energy share >= deck_energy_min) up to
     f_max_hz, with mode_info deck/cable/pylon_energy, mode_type and model_mode.
     """
-    check_options(cable_elements, lateral_restraint, tensions)
+    check_options(cable_elements, lateral_restraint, tensions, deck_section)
     build = functools.partial(
-        build_bridge, cable_elements=cable_elements, lateral_restraint=lateral_restraint, tensions=tensions
+        build_bridge,
+        cable_elements=cable_elements,
+        lateral_restraint=lateral_restraint,
+        tensions=tensions,
+        deck_section=deck_section,
     )
     plain = OpenSeesModel(
         build=build,
