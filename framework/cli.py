@@ -74,12 +74,19 @@ def _cmd_bench(args) -> int:
     return bench_main(args.structures, workers=args.workers, repeats=args.repeats)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with errors on one line (``gomu run: error: ...``, exit code 2), no usage dump."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="gomu", description="Model updating of civil structures with global optimization"
     )
     p.add_argument("-v", "--verbose", action="store_true", help="debug logging")
-    sub = p.add_subparsers(dest="command", required=True)
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     r = sub.add_parser("run", help="run a study config")
     r.add_argument("config")

@@ -32,12 +32,12 @@ from pydantic import AfterValidator, ConfigDict, Field, StrictInt, ValidationErr
 from framework.errors import InputError, ModelEvaluationError
 from framework.exchange import load_measured
 from framework.measurements import MeasuredModes
-from framework.models.registry import builtin_measured, is_reference, make_structure
+from framework.models.registry import builtin_measured, check_reference, is_reference, make_structure
 from framework.objectives import ObjectiveSpec
 from framework.optimizers import OPTIMIZERS, Budget, run_optimizer, settings_model
 from framework.parameters import ParameterSet
 from framework.problem import UpdatingProblem
-from framework.study.schema import Strict, StudyHeader
+from framework.study.schema import Strict, StudyHeader, evaluation_isolation
 
 log = logging.getLogger(__name__)
 
@@ -111,7 +111,7 @@ class ParametersConfig(Strict):
 class BudgetConfig(Budget):
     """The optimizers' budget and termination rule, read with strict types."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
 
 class AlgorithmConfig(Strict):
@@ -315,9 +315,14 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
             if build_references or not _names_code(task):
                 for options, measured in cases:
                     build_problem(task, structure_options=options, measured_cfg=measured)
-            else:
+            else:  # the checks that import nothing
+                if is_reference(task["structure"]["name"]):
+                    check_reference(task["structure"]["name"], f"structure.name={task['structure']['name']!r}")
                 for _, measured in cases:
-                    if not is_reference(measured.get("builtin") or ""):
+                    builtin = measured.get("builtin") or ""
+                    if is_reference(builtin):
+                        check_reference(builtin, f"measured.builtin={builtin!r}")
+                    else:
                         measured_from(measured)
         except InputError as exc:
             raise InputError(f"study {spec['study']!r}: {exc}") from None
@@ -344,17 +349,19 @@ def _evaluation_bar(spec: dict):
                 unit="eval", leave=False, position=1)
 
 
-def evaluation_runner(execution: dict):
+def evaluation_runner(execution: dict, names_code: bool = False):
     """The runner of a run's model evaluations from the ``execution`` section: backend
-    (serial, processes, dask), isolation of the model in a worker process and the
-    per-evaluation timeout (:func:`framework.parallel.make_evaluation_runner`)."""
+    (serial, processes, dask), isolation of the model in a worker process (``isolate: auto``:
+    when the structure is user code, ``names_code``) and the per-evaluation timeout
+    (:func:`framework.study.schema.evaluation_isolation`, :func:`framework.parallel.make_evaluation_runner`)."""
     from framework.parallel import make_evaluation_runner
 
+    isolate, timeout_s = evaluation_isolation(execution, names_code)
     return make_evaluation_runner(
         execution.get("evaluation_backend", "serial"),
         workers=execution.get("workers", 2),
-        isolate=bool(execution.get("isolate", False)),
-        timeout_s=execution.get("evaluation_timeout_s"),
+        isolate=isolate,
+        timeout_s=timeout_s,
         scheduler=execution.get("scheduler"),
     )
 
@@ -362,7 +369,7 @@ def evaluation_runner(execution: dict):
 def run(spec: dict) -> dict[str, list[dict]]:
     """One optimizer run and the rows of every table."""
     task = spec["task"]
-    runner, close = evaluation_runner(task.get("execution", {}))
+    runner, close = evaluation_runner(task.get("execution", {}), is_reference(task["structure"]["name"]))
     try:
         return _run(spec, task, runner)
     finally:
