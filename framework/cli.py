@@ -78,7 +78,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse with errors on one line (``gomu run: error: ...``, exit code 2), no usage dump."""
 
     def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {one_line(' '.join(message.split()))} (see {self.prog} --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -137,6 +137,12 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def one_line(text: str) -> str:
+    """``text`` as one printable line: line breaks and other non-printable characters (also
+    those of keys and values quoted from a user's file, e.g. U+0085) written as escapes."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
+
+
 def main(argv: list[str] | None = None) -> int:
     # as `python -m` does: modules in the current folder (a user's build function) are importable
     if os.getcwd() not in sys.path and "" not in sys.path:
@@ -148,11 +154,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.fn(args)
     except InputError as exc:
-        sys.stderr.write(f"gomu: error: {exc}\n")
+        sys.stderr.write(f"gomu: error: {one_line(str(exc))}\n")
         return 2
     except OSError as exc:  # the disk, not the input: one line, exit 1
         where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
-        sys.stderr.write(f"gomu: error: {where}{exc.strerror or exc}\n")
+        sys.stderr.write(f"gomu: error: {one_line(f'{where}{exc.strerror or exc}')}\n")
         return 1
     except KeyboardInterrupt:
         sys.stderr.write("gomu: interrupted; stored runs are kept - rerun with --resume\n")

@@ -316,11 +316,13 @@ def test_8_alias_bomb_and_huge_run_counts_are_refused(tmp_path, capsys):
     {"measured": {"builtin": "os:system", "case": "touch {marker}"}},
     {"validation": [{"case": "v", "measured": {"builtin": "os:system", "case": "touch {marker}"}}]},
     {"structure": {"name": "os:system", "options": {"command": "touch {marker}"}}},
+    {"kind": "analysis", "structure": {"name": "os:system", "options": {"command": "touch {marker}"}},
+     "algorithms": None, "budget": None},
     {"kind": "diagnose", "structure": "os:system", "structure_options": {"command": "touch {marker}"},
      "measured": {"builtin": "lab_frame"}, "algorithms": None, "budget": None},
     {"kind": "diagnose", "structure": "lab_frame", "measured": {"builtin": "os:system", "case": "touch {marker}"},
      "algorithms": None, "budget": None},
-], ids=["measured", "validation", "structure", "diagnose_structure", "diagnose_measured"])
+], ids=["measured", "validation", "structure", "analysis_structure", "diagnose_structure", "diagnose_measured"])
 def test_9_a_config_cannot_run_library_code(tmp_path, capsys, changes):
     marker = tmp_path / "pwned"
     data = json.loads(json.dumps({**BASE, **changes}).replace("{marker}", str(marker)))

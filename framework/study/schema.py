@@ -75,7 +75,7 @@ class ExecutionConfig(Strict):
     evaluation_backend: Literal["serial", "processes", "dask"] = "serial"
     #: evaluate the model in an isolated worker process, so that a crash, ``sys.exit`` or hang
     #: of the model becomes a recorded failure of that evaluation: true, false, or "auto"
-    #: (isolated exactly when the structure is user code named as ``module:function``)
+    #: (isolated exactly when the structure is user code: ``module:function`` outside ``framework``)
     isolate: StrictBool | Literal["auto"] = "auto"
     #: wall-time limit of one model evaluation in seconds (implies isolation); isolated
     #: evaluations without one get DEFAULT_EVALUATION_TIMEOUT_S

@@ -111,7 +111,7 @@ class Config(StudyHeader):
         from framework.discrepancy.effects import CATALOGUES
 
         if v not in CATALOGUES:
-            raise ValueError(f"unknown catalogue {v!r}; known: {sorted(CATALOGUES)}")
+            raise ValueError(f"structure {v!r} has no effect catalogue; known: {sorted(CATALOGUES)}")
         return v
 
     @field_serializer("settings")

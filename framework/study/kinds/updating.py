@@ -316,18 +316,26 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
                 for options, measured in cases:
                     build_problem(task, structure_options=options, measured_cfg=measured)
             else:  # the checks that import nothing
-                if is_reference(task["structure"]["name"]):
-                    check_reference(task["structure"]["name"], f"structure.name={task['structure']['name']!r}")
+                check_named_code(task)
                 for _, measured in cases:
-                    builtin = measured.get("builtin") or ""
-                    if is_reference(builtin):
-                        check_reference(builtin, f"measured.builtin={builtin!r}")
-                    else:
+                    if not is_reference(measured.get("builtin") or ""):
                         measured_from(measured)
         except InputError as exc:
             raise InputError(f"study {spec['study']!r}: {exc}") from None
         except (KeyError, ValueError, TypeError) as exc:
             raise InputError(f"study {spec['study']!r}: {type(exc).__name__}: {exc}") from None
+
+
+def check_named_code(task: dict) -> None:
+    """The checks of code named in a task that import nothing (``module:function`` form, not
+    the standard library; :func:`framework.models.registry.check_reference`)."""
+    name = task["structure"]["name"]
+    if is_reference(name):
+        check_reference(name, f"structure.name={name!r}")
+    for measured in [task["measured"]] + [c["measured"] for c in task["validation"]]:
+        builtin = measured.get("builtin") or ""
+        if is_reference(builtin):
+            check_reference(builtin, f"measured.builtin={builtin!r}")
 
 
 def _names_code(task: dict) -> bool:
@@ -369,7 +377,9 @@ def evaluation_runner(execution: dict, names_code: bool = False):
 def run(spec: dict) -> dict[str, list[dict]]:
     """One optimizer run and the rows of every table."""
     task = spec["task"]
-    runner, close = evaluation_runner(task.get("execution", {}), is_reference(task["structure"]["name"]))
+    name = task["structure"]["name"]
+    user_code = is_reference(name) and not name.startswith("framework.")  # isolate: auto
+    runner, close = evaluation_runner(task.get("execution", {}), user_code)
     try:
         return _run(spec, task, runner)
     finally:
