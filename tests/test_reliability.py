@@ -376,3 +376,10 @@ def test_10_snt_spends_the_total_budget_not_one_per_minimum():
     problem = UpdatingProblem(make_structure("lab_frame_3dof"), measured())
     result = run_optimizer("snt", problem, 0, Budget(max_evaluations=600), n_minima=4)
     assert 0 < result.n_evaluations <= 600
+
+
+def test_8_a_sweep_grid_is_counted_before_it_is_built(tmp_path, capsys):
+    sweep = {f"algorithms.sm.settings.{k}": [1e-3 * (i + 1) for i in range(50)]
+             for k in ("xtol", "ftol", "gtol", "initial_step", "min_step", "max_step")}  # 50**6 variants
+    cfg = _write(tmp_path, dict(BASE, sweep=sweep))
+    _one_line_error(*_gomu(capsys, "validate", cfg)[::2], r"15625000000 variants, more than the limit")
