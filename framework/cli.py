@@ -57,9 +57,21 @@ def _cmd_validate(args) -> int:
     cfg = load(args.config, args.set)
     specs = plan(cfg)
     preflight(cfg, specs, build_references=args.build)
-    note = "" if args.build else " (code named in the config was not imported; --build to build the models)"
+    named = _named_code(cfg.model_dump(mode="json"))
+    note = "" if args.build or not named else (
+        f" (code named in the config was not imported: {', '.join(sorted(named))}; --build to import it)")
     sys.stdout.write(f"{args.config}: OK - kind {cfg.kind!r}, {len(specs)} runs{note}\n")
     return 0
+
+
+def _named_code(data: dict) -> set[str]:
+    """The ``module:function`` references of a config (the only fields that may name code:
+    structure.name, measured.builtin, validation[].measured.builtin)."""
+    structure = data.get("structure")
+    names = [structure.get("name") if isinstance(structure, dict) else None]
+    sections = [data.get("measured")] + [v.get("measured") for v in data.get("validation") or [] if isinstance(v, dict)]
+    names += [m.get("builtin") for m in sections if isinstance(m, dict)]
+    return {n for n in names if isinstance(n, str) and ":" in n}
 
 
 def _cmd_diagnose(args) -> int:
