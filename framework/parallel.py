@@ -57,8 +57,8 @@ def dask_client(scheduler: str | None = None, workers: int = 2, timeout_s: float
             return Client(scheduler, timeout=timeout_s)
         except Exception as exc:  # refused, timed out, bad address, not a scheduler answering
             detail = " ".join(str(exc).split())[:200] or type(exc).__name__
-            raise InputError(f"--scheduler {scheduler}: cannot connect to a Dask scheduler there "
-                             f"within {timeout_s:g} s ({type(exc).__name__}: {detail})") from None
+            raise InputError(f"execution.scheduler (or --scheduler) {scheduler}: cannot connect to a Dask "
+                             f"scheduler there within {timeout_s:g} s ({type(exc).__name__}: {detail})") from None
     cluster = LocalCluster(
         n_workers=workers,
         threads_per_worker=1,

@@ -235,7 +235,7 @@ def test_7_bad_command_lines(tmp_path, capsys, monkeypatch):
 
     monkeypatch.setattr(framework.parallel, "CONNECT_TIMEOUT_S", 0.5)
     _one_line_error(*_gomu(capsys, "run", cfg, "--scheduler", "tcp://127.0.0.1:1")[::2],
-                    r"--scheduler tcp://127\.0\.0\.1:1: cannot connect")
+                    r"study\.yaml: execution\.scheduler \(or --scheduler\) tcp://127\.0\.0\.1:1: cannot connect")
     _one_line_error(*_gomu(capsys, "validate", cfg, "--set", "execution.scheduler=nowhere")[::2],
                     r"execution\.scheduler: a Dask scheduler address")
     assert not (tmp_path / "out").exists()

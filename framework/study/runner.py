@@ -38,10 +38,13 @@ def preflight(cfg: StudyHeader, specs: list[dict], build_references: bool = True
     try:
         check(specs, build_references=build_references)
     except InputError as exc:  # name the config file too, not only the data file or field
-        source = getattr(cfg, "_source", "")
-        if source and not str(exc).startswith(source):
-            raise InputError(f"{source}: {exc}") from None
-        raise
+        raise _named(cfg, exc) from None
+
+
+def _named(cfg: StudyHeader, exc: InputError) -> InputError:
+    """``exc`` with the config file it came from in front (if known and not named yet)."""
+    source = getattr(cfg, "_source", "")
+    return InputError(f"{source}: {exc}") if source and not str(exc).startswith(source) else exc
 
 
 def run_study(
@@ -70,9 +73,15 @@ def run_study(
     workers = workers or cfg.execution.workers
     scheduler = scheduler or cfg.execution.scheduler
     # a scheduler that cannot be reached is an input error before anything stored is touched
-    client = dask_client(scheduler, workers) if backend == "dask" and scheduler else None
     try:
-        store.claim(cfg.study)
+        client = dask_client(scheduler, workers) if backend == "dask" and scheduler else None
+    except InputError as exc:
+        raise _named(cfg, exc) from None
+    try:
+        try:
+            store.claim(cfg.study)
+        except InputError as exc:
+            raise _named(cfg, exc) from None
         store.clean_temp()
         wanted = {s["run_id"] for s in specs}
         if not resume:
