@@ -144,6 +144,33 @@ def prop_set_values(overrides):
         _check(*_cli(*argv), cfg)
 
 
+OTHER_KINDS = {
+    "diagnose": ({"study": "d", "kind": "diagnose", "structure": "lab_frame",
+                  "measured": {"builtin": "lab_frame", "case": "base"}, "settings": {"n_starts": 1}},
+                 ["structure", "structure_options", "start_effects", "measured", "measured.builtin", "measured.case",
+                  "measured.generate", "measured.generate.noise", "measured.generate.hidden", "measured.generate.seed",
+                  "measured.file", "settings", "settings.n_starts", "settings.alpha", "runs", "report"]),
+    "analysis": ({"study": "a", "kind": "analysis", "structure": {"name": "lab_frame_3dof"},
+                  "measured": {"builtin": "lab_frame"}},
+                 ["structure", "structure.name", "structure.options", "measured", "points", "points.p",
+                  "points.p.values", "points.p.ratios", "sensitivity", "sensitivity.rel_step", "pairings",
+                  "parameters", "objective", "validation"]),
+}  # fmt: skip
+
+
+def prop_other_kinds(kind: str, data):
+    """Changed fields of the diagnose and analysis kinds' configs through ``gomu validate``."""
+    base, paths = OTHER_KINDS[kind]
+    config = yaml.safe_load(yaml.safe_dump(base))
+    for path, value in data.draw(st.lists(st.tuples(st.sampled_from(paths), values), min_size=1, max_size=3)):
+        _set(config, path, value)
+    with tempfile.TemporaryDirectory() as tmp:
+        config["output"] = str(Path(tmp) / "out")
+        cfg = Path(tmp) / "study.yaml"
+        cfg.write_text(yaml.safe_dump(config, allow_unicode=True))
+        _check(*_cli("validate", cfg), cfg)
+
+
 def prop_run_leaves_stored_results_alone(results, overrides, resume: bool):
     """``gomu run`` with fuzzed --set values into an existing results folder: exit 0 or 2, and
     after an error the folder is byte for byte what it was."""
@@ -225,6 +252,8 @@ test_spliced_config, test_spliced_config_long = _both(
     prop_spliced_config_text, (st.integers(0, 10_000), st.integers(0, 20), st.text(max_size=20)), 30, 500)
 test_data_file, test_data_file_long = _both(prop_data_file, (data_file,), 40, 800)
 test_set_values, test_set_values_long = _both(prop_set_values, (overrides,), 40, 800)
+test_other_kinds, test_other_kinds_long = _both(prop_other_kinds, (st.sampled_from(sorted(OTHER_KINDS)), st.data()),
+                                                30, 600)
 
 
 @settings(max_examples=12, **FAST)

@@ -76,7 +76,18 @@ def variant_label(name: str, values: dict[str, Any], names: dict[str, str]) -> s
 
 
 def plan(cfg: StudyHeader) -> list[dict]:
-    """All run specs of a study, in a stable order, without duplicates."""
+    """All run specs of a study, in a stable order, without duplicates; an InputError names
+    the config file the study was read from."""
+    try:
+        return _plan(cfg)
+    except InputError as exc:
+        source = getattr(cfg, "_source", "")
+        if source and not str(exc).startswith(source):
+            raise InputError(f"{source}: {exc}") from None
+        raise
+
+
+def _plan(cfg: StudyHeader) -> list[dict]:
     kind = get_kind(cfg.kind)
     identity_of = getattr(kind, "identity", lambda task: task)
     names = column_names(list(cfg.sweep))
