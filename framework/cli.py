@@ -57,9 +57,21 @@ def _cmd_validate(args) -> int:
     cfg = load(args.config, args.set)
     specs = plan(cfg)
     preflight(cfg, specs, build_references=args.build)
-    note = "" if args.build else " (code named in the config was not imported; --build to build the models)"
+    named = _named_code(cfg.model_dump(mode="json"))
+    note = "" if args.build or not named else (
+        f" (code named in the config was not imported: {', '.join(sorted(named))}; --build to import it)")
     sys.stdout.write(f"{args.config}: OK - kind {cfg.kind!r}, {len(specs)} runs{note}\n")
     return 0
+
+
+def _named_code(data: dict) -> set[str]:
+    """The ``module:function`` references of a config (the only fields that may name code:
+    structure.name, measured.builtin, validation[].measured.builtin)."""
+    structure = data.get("structure")
+    names = [structure.get("name") if isinstance(structure, dict) else None]
+    sections = [data.get("measured")] + [v.get("measured") for v in data.get("validation") or [] if isinstance(v, dict)]
+    names += [m.get("builtin") for m in sections if isinstance(m, dict)]
+    return {n for n in names if isinstance(n, str) and ":" in n}
 
 
 def _cmd_diagnose(args) -> int:
@@ -74,12 +86,19 @@ def _cmd_bench(args) -> int:
     return bench_main(args.structures, workers=args.workers, repeats=args.repeats)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with errors on one line (``gomu run: error: ...``, exit code 2), no usage dump."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {one_line(' '.join(message.split()))} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="gomu", description="Model updating of civil structures with global optimization"
     )
     p.add_argument("-v", "--verbose", action="store_true", help="debug logging")
-    sub = p.add_subparsers(dest="command", required=True)
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     r = sub.add_parser("run", help="run a study config")
     r.add_argument("config")
@@ -130,6 +149,12 @@ def _positive_int(text: str) -> int:
     return value
 
 
+def one_line(text: str) -> str:
+    """``text`` as one printable line: line breaks and other non-printable characters (also
+    those of keys and values quoted from a user's file, e.g. U+0085) written as escapes."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
+
+
 def main(argv: list[str] | None = None) -> int:
     # as `python -m` does: modules in the current folder (a user's build function) are importable
     if os.getcwd() not in sys.path and "" not in sys.path:
@@ -141,11 +166,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.fn(args)
     except InputError as exc:
-        sys.stderr.write(f"gomu: error: {exc}\n")
+        sys.stderr.write(f"gomu: error: {one_line(str(exc))}\n")
         return 2
     except OSError as exc:  # the disk, not the input: one line, exit 1
         where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
-        sys.stderr.write(f"gomu: error: {where}{exc.strerror or exc}\n")
+        sys.stderr.write(f"gomu: error: {one_line(f'{where}{exc.strerror or exc}')}\n")
         return 1
     except KeyboardInterrupt:
         sys.stderr.write("gomu: interrupted; stored runs are kept - rerun with --resume\n")

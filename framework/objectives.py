@@ -59,8 +59,9 @@ from framework.parameters import ParameterSet
 
 
 def _no_bool(value):
-    """Reject booleans where a number is expected (pydantic would read True as 1.0)."""
-    if isinstance(value, bool):
+    """Reject booleans and text where a number is expected (pydantic would read True as 1.0
+    and '1' as 1.0)."""
+    if isinstance(value, bool | str | bytes):
         raise ValueError(f"expected a number, got {value!r}")
     return value
 

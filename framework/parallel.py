@@ -28,7 +28,7 @@ import os
 import threading
 from collections.abc import Callable, Iterator, Sequence
 
-from framework.errors import ModelEvaluationError
+from framework.errors import InputError, ModelEvaluationError
 from framework.isolation import IsolatedRunner, guard_parent_death
 from framework.models.base import modal_many
 
@@ -41,12 +41,24 @@ def _context():
     return mp.get_context("fork") if "fork" in mp.get_all_start_methods() else mp.get_context("spawn")
 
 
-def dask_client(scheduler: str | None = None, workers: int = 2):
-    """A distributed Client: connect to ``scheduler`` or start a local cluster of processes."""
+#: how long to try to reach a Dask scheduler before giving up (s)
+CONNECT_TIMEOUT_S = 5.0
+
+
+def dask_client(scheduler: str | None = None, workers: int = 2, timeout_s: float | None = None):
+    """A distributed Client: connect to ``scheduler`` (InputError naming the address if it
+    cannot be reached within ``timeout_s``, default :data:`CONNECT_TIMEOUT_S`) or start a
+    local cluster of processes."""
     from distributed import Client, LocalCluster
 
     if scheduler:
-        return Client(scheduler)
+        timeout_s = CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
+        try:
+            return Client(scheduler, timeout=timeout_s)
+        except Exception as exc:  # refused, timed out, bad address, not a scheduler answering
+            detail = " ".join(str(exc).split())[:200] or type(exc).__name__
+            raise InputError(f"execution.scheduler (or --scheduler) {scheduler}: cannot connect to a Dask "
+                             f"scheduler there within {timeout_s:g} s ({type(exc).__name__}: {detail})") from None
     cluster = LocalCluster(
         n_workers=workers,
         threads_per_worker=1,

@@ -491,10 +491,15 @@ def parse_number(text: str, where: str) -> float:
     value = text.strip()
     if not _DECIMAL_RE.match(value):
         hint = " (decimal comma? use '.')" if re.fullmatch(r"[-+]?[0-9]+,[0-9]+", value) else ""
-        raise InputError(f"{where}: not numeric: {text!r}{hint}")
+        raise InputError(f"{where}: not numeric: {_clip(repr(text))}{hint}")
     number = float(value)
     if not math.isfinite(number):
-        raise InputError(f"{where}: number {value} is outside the double-precision range")
+        raise InputError(f"{where}: number {_clip(value)} is outside the double-precision range")
     if number == 0.0 and re.search("[1-9]", re.split("[eE]", value)[0]):
-        raise InputError(f"{where}: number {value} is too small: it would be read as 0")
+        raise InputError(f"{where}: number {_clip(value)} is too small: it would be read as 0")
     return number
+
+
+def _clip(text: str, limit: int = 40) -> str:
+    """``text`` shortened for a message: its start and its length."""
+    return text if len(text) <= limit else f"{text[:limit - 3]}...({len(text)} characters)"

@@ -127,12 +127,21 @@ def get_catalogue(name: str, **options) -> Catalogue:
     path = CATALOGUES.get(name, name)
     if ":" not in path:
         raise InputError(f"structure {name!r} has no effect catalogue; known: {sorted(CATALOGUES)}")
-    module, attr = path.split(":", 1)
-    try:
+    if name in CATALOGUES:
+        module, attr = path.split(":", 1)
         fn = getattr(importlib.import_module(module), attr)
-    except (ImportError, AttributeError) as exc:
-        raise InputError(f"structure {name!r}: cannot import catalogue {path!r}: {exc}") from exc
+    else:  # user code: the registry's trust rules (a function defined in a user module)
+        from framework.models.registry import resolve
+
+        fn = resolve(path, f"structure={name!r}")
     try:
-        return fn(**options)
+        catalogue = fn(**options)
+    except InputError:
+        raise
     except TypeError as exc:
-        raise InputError(f"structure {name!r}: bad catalogue options {sorted(options)}: {exc}") from exc
+        raise InputError(f"structure {name!r}: bad catalogue options {sorted(options)}: {exc}") from None
+    except Exception as exc:
+        raise InputError(f"structure {name!r}: building the catalogue failed: {type(exc).__name__}: {exc}") from None
+    if not isinstance(catalogue, Catalogue):
+        raise InputError(f"structure {name!r}: {path!r} returned {type(catalogue).__name__}, not a Catalogue")
+    return catalogue

@@ -37,6 +37,18 @@ def is_reference(name: str) -> bool:
     return isinstance(name, str) and ":" in name and name not in STRUCTURES and name not in MEASUREMENTS
 
 
+def check_reference(path: str, what: str) -> tuple[str, str]:
+    """The checks of :func:`resolve` that import nothing: ``module:function`` form, module not
+    of the standard library. Returns (module, function name)."""
+    if not isinstance(path, str) or ":" not in path:
+        raise InputError(f"{what}: {path!r} is neither a built-in name nor 'module:function'")
+    module, attr = path.split(":", 1)
+    top = module.split(".")[0]
+    if not module or not attr or top in sys.stdlib_module_names:
+        raise InputError(f"{what}: {path!r} is not a structure or data provider of a user module")
+    return module, attr
+
+
 def resolve(path: str, what: str):
     """Import ``module:function`` and return the function; errors name the entry.
 
@@ -45,12 +57,7 @@ def resolve(path: str, what: str):
     module (``os:system`` names a function of ``posix`` and is refused); modules of the
     Python standard library are refused outright.
     """
-    if not isinstance(path, str) or ":" not in path:
-        raise InputError(f"{what}: {path!r} is neither a built-in name nor 'module:function'")
-    module, attr = path.split(":", 1)
-    top = module.split(".")[0]
-    if not module or not attr or top in sys.stdlib_module_names:
-        raise InputError(f"{what}: {path!r} is not a structure or data provider of a user module")
+    module, attr = check_reference(path, what)
     try:
         obj = getattr(importlib.import_module(module), attr)
     except ImportError as exc:

@@ -26,9 +26,9 @@ from framework.evaluator import BudgetExhausted  # noqa: F401  (re-exported for 
 
 
 class Budget(BaseModel):
-    """Evaluation budget and the termination rule shared by the optimizers."""
+    """Evaluation budget and the termination rule shared by the optimizers (finite numbers only)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     max_evaluations: int = Field(50_000, gt=0)
     stall_iterations: int = Field(10, gt=0)
@@ -38,9 +38,9 @@ class Budget(BaseModel):
 
 
 class Settings(BaseModel):
-    """Base of every optimizer's settings: unknown keys are rejected."""
+    """Base of every optimizer's settings: unknown keys and non-finite numbers are rejected."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 @dataclass

@@ -136,6 +136,9 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         generation += 1
         if termination.update(evaluator.best_objective):
             break
+    if generation == 0:  # the budget does not afford one population: nothing evaluated, a failed run
+        return Outcome("budget", 0, message=f"budget of {budget.max_evaluations} evaluations is smaller than "
+                                            f"one population of {s.pop_size}")
     res = algorithm.result()
     front_F = np.atleast_2d(np.asarray(res.F, dtype=float))
     front_X = np.atleast_2d(np.asarray(res.X, dtype=float))

@@ -86,4 +86,6 @@ def load(path: str | Path, overrides: list[str] | None = None) -> StudyHeader:
     """Read a YAML config, apply ``key.path=value`` overrides, validate."""
     path = Path(path)
     data = read_with_overrides(path, overrides)
-    return validate(data, source=str(path), base_dir=path.parent)
+    cfg = validate(data, source=str(path), base_dir=path.parent)
+    cfg._source = str(path)
+    return cfg

@@ -17,6 +17,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
+import math
 from typing import Any
 
 from framework.errors import InputError
@@ -45,10 +46,11 @@ def expand(cfg: StudyHeader) -> list[tuple[str, dict[str, Any], StudyHeader]]:
     """Every (variant name, sweep values, config with both applied)."""
     variants = cfg.variants or {"": {}}
     keys = list(cfg.sweep)
-    combos = list(itertools.product(*(cfg.sweep[k] for k in keys))) if keys else [()]
-    if len(variants) * len(combos) > MAX_PLANNED_RUNS:
-        raise InputError(f"study {cfg.study!r}: {len(variants) * len(combos)} variants exceed the limit of "
+    n = len(variants) * math.prod(len(cfg.sweep[k]) for k in keys)  # counted before any is built
+    if n > MAX_PLANNED_RUNS:
+        raise InputError(f"study {cfg.study!r}: sweep and variants give {n} variants, more than the limit of "
                          f"{MAX_PLANNED_RUNS}")
+    combos = list(itertools.product(*(cfg.sweep[k] for k in keys))) if keys else [()]
     if not cfg.variants and not keys:
         return [("", {}, cfg)]
     base = cfg.model_dump(mode="json")
@@ -74,7 +76,18 @@ def variant_label(name: str, values: dict[str, Any], names: dict[str, str]) -> s
 
 
 def plan(cfg: StudyHeader) -> list[dict]:
-    """All run specs of a study, in a stable order, without duplicates."""
+    """All run specs of a study, in a stable order, without duplicates; an InputError names
+    the config file the study was read from."""
+    try:
+        return _plan(cfg)
+    except InputError as exc:
+        source = getattr(cfg, "_source", "")
+        if source and not str(exc).startswith(source):
+            raise InputError(f"{source}: {exc}") from None
+        raise
+
+
+def _plan(cfg: StudyHeader) -> list[dict]:
     kind = get_kind(cfg.kind)
     identity_of = getattr(kind, "identity", lambda task: task)
     names = column_names(list(cfg.sweep))

@@ -9,13 +9,14 @@ consolidate the tables -> analyses (table -> table) -> figures (from the tables)
 from __future__ import annotations
 
 import logging
+import re
 from pathlib import Path
 
 import pandas as pd
 import yaml
 
 from framework.errors import InputError
-from framework.parallel import map_unordered
+from framework.parallel import dask_client, map_unordered
 from framework.provenance import write_provenance
 from framework.study.execute import error_tables, execute_run
 from framework.study.kinds import get_kind
@@ -23,6 +24,7 @@ from framework.study.plan import plan
 from framework.study.schema import StudyHeader
 from framework.study.store import ResultStore
 from framework.tables import read_tables, write_table
+from framework.textio import read_text_file
 
 log = logging.getLogger(__name__)
 
@@ -31,8 +33,18 @@ def preflight(cfg: StudyHeader, specs: list[dict], build_references: bool = True
     """The kind's checks of every distinct input before any run starts (InputError).
     ``build_references=False``: do not import code the config names (``gomu validate``)."""
     check = getattr(get_kind(cfg.kind), "preflight", None)
-    if check is not None:
+    if check is None:
+        return
+    try:
         check(specs, build_references=build_references)
+    except InputError as exc:  # name the config file too, not only the data file or field
+        raise _named(cfg, exc) from None
+
+
+def _named(cfg: StudyHeader, exc: InputError) -> InputError:
+    """``exc`` with the config file it came from in front (if known and not named yet)."""
+    source = getattr(cfg, "_source", "")
+    return InputError(f"{source}: {exc}") if source and not str(exc).startswith(source) else exc
 
 
 def run_study(
@@ -57,31 +69,43 @@ def run_study(
     store = ResultStore(out)
     specs = plan(cfg)
     preflight(cfg, specs)
-    store.claim(cfg.study)
-    store.clean_temp()
-    wanted = {s["run_id"] for s in specs}
-    if not resume:
-        store.discard()
-    store.write_config(yaml.safe_dump(cfg.model_dump(mode="json"), sort_keys=False))
-    write_provenance(out)
-    done = store.stored_ids()
-    todo = [s for s in specs if s["run_id"] not in done]
-    log.info("study %s: %d runs planned, %d stored, %d to run", cfg.study, len(specs), len(specs) - len(todo),
-             len(todo))
     backend = backend or cfg.execution.backend
     workers = workers or cfg.execution.workers
     scheduler = scheduler or cfg.execution.scheduler
-    show = cfg.execution.progress if progress is None else progress
-    bar = _progress(len(todo), cfg.study, show)
+    # a scheduler that cannot be reached is an input error before anything stored is touched
     try:
-        for i, result in map_unordered(execute_run, todo, backend=backend, workers=workers, scheduler=scheduler):
-            spec = todo[i]
-            if isinstance(result, BaseException):
-                result = error_tables(spec, result)
-            store.write_run(spec["run_id"], result, study=cfg.study, kind=cfg.kind)
-            bar.update(1)
+        client = dask_client(scheduler, workers) if backend == "dask" and scheduler else None
+    except InputError as exc:
+        raise _named(cfg, exc) from None
+    try:
+        try:
+            store.claim(cfg.study)
+        except InputError as exc:
+            raise _named(cfg, exc) from None
+        store.clean_temp()
+        wanted = {s["run_id"] for s in specs}
+        if not resume:
+            store.discard()
+        store.write_config(yaml.safe_dump(cfg.model_dump(mode="json"), sort_keys=False))
+        write_provenance(out)
+        done = store.stored_ids()
+        todo = [s for s in specs if s["run_id"] not in done]
+        log.info("study %s: %d runs planned, %d stored, %d to run", cfg.study, len(specs), len(specs) - len(todo),
+                 len(todo))
+        show = cfg.execution.progress if progress is None else progress
+        bar = _progress(len(todo), cfg.study, show)
+        try:
+            for i, result in map_unordered(execute_run, todo, backend=backend, workers=workers, client=client):
+                spec = todo[i]
+                if isinstance(result, BaseException):
+                    result = error_tables(spec, result)
+                store.write_run(spec["run_id"], result, study=cfg.study, kind=cfg.kind)
+                bar.update(1)
+        finally:
+            bar.close()
     finally:
-        bar.close()
+        if client is not None:
+            client.close()
     tables = store.consolidate(wanted, kind.TABLES)
     derive(out, tables, cfg, figures=figures)
     return tables
@@ -94,6 +118,10 @@ def derive(out: Path, tables: dict[str, pd.DataFrame], cfg: StudyHeader, figures
     """
     kind = get_kind(cfg.kind)
     written: list[Path] = []
+    counts = failure_counts(tables.get("runs", pd.DataFrame()))
+    if not counts.empty:
+        write_table(counts, out / "failures")
+        written.append(out / "failures.csv")
     analyses = getattr(kind, "analyses", None)
     if analyses is not None:
         try:
@@ -126,9 +154,10 @@ def report(results_dir: str | Path) -> list[Path]:
     config_path = root / "config.yaml"
     if not config_path.exists():
         raise InputError(f"{root}: no config.yaml: not a results folder of gomu run")
+    text = read_text_file(config_path, what="results config")  # size limit, UTF-8, not a folder
     try:
-        data = yaml.safe_load(config_path.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        data = yaml.safe_load(text)  # written by gomu run with yaml.safe_dump
+    except (yaml.YAMLError, RecursionError) as exc:
         raise InputError(f"{config_path}: cannot be read ({type(exc).__name__})") from None
     cfg = validate(data, source=str(config_path))
     kind = get_kind(cfg.kind)
@@ -136,6 +165,28 @@ def report(results_dir: str | Path) -> list[Path]:
     if not tables or all(df.empty for df in tables.values()):
         raise InputError(f"{root}: no result tables to report on")
     return derive(root, tables, cfg)
+
+
+#: one entry of a run's ``failures`` text: "<reason> x<count> (<example message>)"
+_FAILURE_ENTRY = re.compile(r"(?:^|; )([A-Za-z0-9_]+) x([0-9]+) \(")
+
+
+def failure_counts(runs: pd.DataFrame) -> pd.DataFrame:
+    """Failed evaluations by reason: per label, variant and reason, the failed evaluations
+    (``n_failed``) and the runs that had any (``n_runs``), from the runs table's ``failures``
+    column (written by the evaluator as ``reason xN (example); ...``). Empty without failures."""
+    columns = ["label", "variant", "reason", "n_failed", "n_runs"]
+    if runs.empty or "failures" not in runs or not {"label", "variant"} <= set(runs):
+        return pd.DataFrame(columns=columns)
+    rows = []
+    for label, variant, text in zip(runs["label"], runs["variant"], runs["failures"]):
+        if isinstance(text, str):
+            rows += [(label, variant, m.group(1), int(m.group(2))) for m in _FAILURE_ENTRY.finditer(text)]
+    if not rows:
+        return pd.DataFrame(columns=columns)
+    df = pd.DataFrame(rows, columns=columns[:4])
+    g = df.groupby(["label", "variant", "reason"], sort=True)["n_failed"]
+    return g.agg(n_failed="sum", n_runs="size").reset_index()
 
 
 def _progress(total: int, name: str, show: bool):

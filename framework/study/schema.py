@@ -21,9 +21,19 @@ Header fields:
 from __future__ import annotations
 
 import re
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictBool, StrictInt, ValidationError, field_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    StrictBool,
+    StrictInt,
+    ValidationError,
+    field_validator,
+)
 
 from framework.errors import InputError
 
@@ -31,12 +41,29 @@ from framework.errors import InputError
 MAX_RUNS_PER_ENTRY = 100_000
 MAX_PLANNED_RUNS = 200_000
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+\-]*$")
+#: a Dask scheduler address: [protocol://]host:port
+SCHEDULER_PATTERN = re.compile(r"^(?:[a-z][a-z0-9+]*://)?[A-Za-z0-9_.\-\[\]:]+:[0-9]{1,5}$")
 
 
 class Strict(BaseModel):
     """Base of every config section: unknown keys rejected, values not coerced across types."""
 
     model_config = ConfigDict(extra="forbid", strict=True, validate_default=True)
+
+
+def _number(value):
+    """A number where a float is expected: int or float, never a boolean or text."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"expected a number, got {value!r}")
+    return float(value)
+
+
+#: a float field of a config: ints accepted, booleans and text refused
+Number = Annotated[float, BeforeValidator(_number)]
+
+#: wall-time limit (s) of one isolated model evaluation when the config gives none: a hang
+#: becomes a "timeout" failure of that evaluation instead of a study that never ends
+DEFAULT_EVALUATION_TIMEOUT_S = 600.0
 
 
 class ExecutionConfig(Strict):
@@ -46,13 +73,36 @@ class ExecutionConfig(Strict):
     workers: StrictInt = Field(2, ge=1, le=1024)
     scheduler: str | None = None
     evaluation_backend: Literal["serial", "processes", "dask"] = "serial"
-    #: evaluate user/OpenSees models in an isolated worker process (a crash, sys.exit or hang
-    #: of the model becomes a recorded failure of that evaluation)
-    isolate: StrictBool = False
-    #: wall-time limit of one model evaluation in seconds (implies isolation)
-    evaluation_timeout_s: float | None = Field(None, gt=0, le=86_400, strict=False)
+    #: evaluate the model in an isolated worker process, so that a crash, ``sys.exit`` or hang
+    #: of the model becomes a recorded failure of that evaluation: true, false, or "auto"
+    #: (isolated exactly when the structure is user code: ``module:function`` outside ``framework``)
+    isolate: StrictBool | Literal["auto"] = "auto"
+    #: wall-time limit of one model evaluation in seconds (implies isolation); isolated
+    #: evaluations without one get DEFAULT_EVALUATION_TIMEOUT_S
+    evaluation_timeout_s: Number | None = Field(None, gt=0, le=86_400, allow_inf_nan=False)
     progress: StrictBool = True
     progress_evaluations: StrictBool = False
+
+    @field_validator("scheduler")
+    @classmethod
+    def _address(cls, v):
+        if v is not None and not SCHEDULER_PATTERN.match(v):
+            raise ValueError(f"a Dask scheduler address is [tcp://]host:port, got {v!r}")
+        return v
+
+
+def evaluation_isolation(execution: dict, names_code: bool) -> tuple[bool, float | None]:
+    """(isolate, timeout_s) of a run's model evaluations from its ``execution`` section.
+
+    ``isolate: auto`` isolates when the structure is user code (``names_code``); an isolated
+    evaluation without ``evaluation_timeout_s`` gets :data:`DEFAULT_EVALUATION_TIMEOUT_S`;
+    a timeout implies isolation."""
+    isolate = execution.get("isolate", "auto")
+    timeout = execution.get("evaluation_timeout_s")
+    isolate = names_code if isolate == "auto" else bool(isolate)
+    if timeout is not None:
+        return True, float(timeout)
+    return isolate, (DEFAULT_EVALUATION_TIMEOUT_S if isolate else None)
 
 
 class StudyHeader(Strict):
@@ -66,6 +116,8 @@ class StudyHeader(Strict):
     execution: ExecutionConfig = Field(default_factory=ExecutionConfig)
     output: str | None = None
     report: dict[str, Any] = Field(default_factory=dict)
+    #: the config file this was read from (named in the errors found after validation)
+    _source: str = PrivateAttr(default="")
 
     @field_validator("study")
     @classmethod
@@ -105,21 +157,25 @@ NON_IDENTITY_FIELDS = ("study", "description", "runs", "seed", "sweep", "variant
 
 
 def format_error(exc: ValidationError, source: str) -> str:
-    """One line per pydantic error: '<source>: <field path>: <message> (value: ...)'."""
-    lines = []
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err["loc"])
-        value = err.get("input")
-        shown = "" if isinstance(value, dict) else f" (value: {_short(value)})"
-        msg = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "extra_forbidden":
-            msg = "unknown key"
-        lines.append(f"{source}: {loc}: {msg}{shown}")
-    return "\n".join(lines)
+    """One line naming the first problem: '<source>: <field path>: <message> (value: ...)',
+    followed by how many more problems there are."""
+    errors = exc.errors()
+    err = errors[0]
+    loc = ".".join(str(p) for p in err["loc"])
+    value = err.get("input")
+    shown = "" if isinstance(value, dict) else f" (value: {_short(value)})"
+    msg = " ".join(err["msg"].removeprefix("Value error, ").split())
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key"
+    more = f" (and {len(errors) - 1} more problem{'s' * (len(errors) > 2)})" if len(errors) > 1 else ""
+    return f"{source}: {loc}: {msg}{shown}{more}"
 
 
 def _short(value: Any, limit: int = 80) -> str:
-    text = repr(value)
+    try:
+        text = repr(value)
+    except ValueError:  # an integer too long to print
+        text = f"<{type(value).__name__}>"
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 

@@ -52,12 +52,13 @@ class ResultStore:
                 f"output {self.root}: holds the results of study {owner!r}; "
                 f"give study {study!r} its own output folder"
             )
-        probe = self.root / ".write_test.tmp"
-        try:
-            probe.write_text("ok")
-            probe.unlink()
-        except OSError as exc:
-            raise InputError(f"output {self.root}: not writable ({exc.strerror})") from None
+        for folder in (self.root, self.parts):  # before any run is computed, not after
+            probe = folder / ".write_test.tmp"
+            try:
+                probe.write_text("ok")
+                probe.unlink()
+            except OSError as exc:
+                raise InputError(f"output {folder}: not writable ({exc.strerror})") from None
         if owner is None:
             atomic_write_text(self.root / "study.json", json.dumps({"study": study}))
 
@@ -74,9 +75,17 @@ class ResultStore:
 
             try:
                 data = yaml.safe_load(config.read_text())
-                return str(data.get("study")) if isinstance(data, dict) and data.get("study") else None
-            except (yaml.YAMLError, UnicodeDecodeError):
-                return None
+                if isinstance(data, dict) and data.get("study"):
+                    return str(data["study"])
+            except (yaml.YAMLError, UnicodeDecodeError, ValueError):
+                pass
+        for part in self._part_files():  # else the study its stored parts name
+            try:
+                data = json.loads(part.read_text(encoding="utf-8"))
+            except (ValueError, UnicodeDecodeError, OSError):
+                continue
+            if isinstance(data, dict) and isinstance(data.get("study"), str) and data["study"]:
+                return data["study"]
         return None
 
     # ---- parts ----------------------------------------------------------------------

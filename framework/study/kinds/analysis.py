@@ -166,12 +166,13 @@ def identity(task: dict) -> dict:
 def preflight(specs: list[dict], build_references: bool = True) -> None:
     """Build every run's problem and point before any run starts (InputError naming the study);
     with ``build_references=False`` a task that names code (``module:function``) is not built."""
-    from framework.study.kinds.updating import _names_code
+    from framework.study.kinds.updating import _names_code, check_named_code
 
     for spec in specs:
-        if not build_references and _names_code(spec["task"]):
-            continue
         try:
+            if not build_references and _names_code(spec["task"]):
+                check_named_code(spec["task"])  # imports nothing
+                continue
             problem = build_problem(spec["task"])
             point_theta(problem.parameters, spec["task"]["point"], spec["label"])
             if "type" in spec["task"]["pairings"] and "mode_types" not in (problem.measured.meta or {}):

@@ -61,6 +61,7 @@ from framework.discrepancy.score import NO_CHANGE
 from framework.discrepancy.tables import TABLES, diagnosis_rows
 from framework.discrepancy.workflow import DiagnoseSettings, diagnose
 from framework.errors import InputError, ModelEvaluationError
+from framework.models.registry import check_reference
 from framework.study.schema import MAX_RUNS_PER_ENTRY, Strict, StudyHeader
 
 log = logging.getLogger(__name__)
@@ -101,6 +102,17 @@ class Config(StudyHeader):
             if isinstance(name, str):
                 data.setdefault("output", f"{LEGACY_ROOT}/{name}")
         return data
+
+    @field_validator("structure")
+    @classmethod
+    def _builtin_catalogue(cls, v: str) -> str:
+        """A config names a built-in catalogue only: no code is named in this field (a user
+        catalogue is used from Python, ``framework.discrepancy.effects.get_catalogue``)."""
+        from framework.discrepancy.effects import CATALOGUES
+
+        if v not in CATALOGUES:
+            raise ValueError(f"structure {v!r} has no effect catalogue; known: {sorted(CATALOGUES)}")
+        return v
 
     @field_serializer("settings")
     def _explicit_settings(self, settings: DiagnoseSettings) -> dict:
@@ -221,6 +233,13 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
         if key in seen:
             continue
         seen.add(key)
+        builtin = task["measured"].get("builtin") or ""
+        if not build_references and ":" in builtin:  # gomu validate imports no code named in the config
+            try:
+                check_reference(builtin, f"measured.builtin={builtin!r}")
+            except InputError as exc:
+                raise InputError(f"study {spec['study']!r}: {exc}") from None
+            continue
         try:
             _check_task(task)
         except InputError as exc:

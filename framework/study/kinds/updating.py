@@ -32,12 +32,12 @@ from pydantic import AfterValidator, ConfigDict, Field, StrictInt, ValidationErr
 from framework.errors import InputError, ModelEvaluationError
 from framework.exchange import load_measured
 from framework.measurements import MeasuredModes
-from framework.models.registry import builtin_measured, is_reference, make_structure
+from framework.models.registry import builtin_measured, check_reference, is_reference, make_structure
 from framework.objectives import ObjectiveSpec
 from framework.optimizers import OPTIMIZERS, Budget, run_optimizer, settings_model
 from framework.parameters import ParameterSet
 from framework.problem import UpdatingProblem
-from framework.study.schema import Strict, StudyHeader
+from framework.study.schema import Strict, StudyHeader, evaluation_isolation
 
 log = logging.getLogger(__name__)
 
@@ -111,7 +111,7 @@ class ParametersConfig(Strict):
 class BudgetConfig(Budget):
     """The optimizers' budget and termination rule, read with strict types."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
 
 class AlgorithmConfig(Strict):
@@ -315,7 +315,8 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
             if build_references or not _names_code(task):
                 for options, measured in cases:
                     build_problem(task, structure_options=options, measured_cfg=measured)
-            else:
+            else:  # the checks that import nothing
+                check_named_code(task)
                 for _, measured in cases:
                     if not is_reference(measured.get("builtin") or ""):
                         measured_from(measured)
@@ -323,6 +324,18 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
             raise InputError(f"study {spec['study']!r}: {exc}") from None
         except (KeyError, ValueError, TypeError) as exc:
             raise InputError(f"study {spec['study']!r}: {type(exc).__name__}: {exc}") from None
+
+
+def check_named_code(task: dict) -> None:
+    """The checks of code named in a task that import nothing (``module:function`` form, not
+    the standard library; :func:`framework.models.registry.check_reference`)."""
+    name = task["structure"]["name"]
+    if is_reference(name):
+        check_reference(name, f"structure.name={name!r}")
+    for measured in [task["measured"]] + [c["measured"] for c in task["validation"]]:
+        builtin = measured.get("builtin") or ""
+        if is_reference(builtin):
+            check_reference(builtin, f"measured.builtin={builtin!r}")
 
 
 def _names_code(task: dict) -> bool:
@@ -344,17 +357,19 @@ def _evaluation_bar(spec: dict):
                 unit="eval", leave=False, position=1)
 
 
-def evaluation_runner(execution: dict):
+def evaluation_runner(execution: dict, names_code: bool = False):
     """The runner of a run's model evaluations from the ``execution`` section: backend
-    (serial, processes, dask), isolation of the model in a worker process and the
-    per-evaluation timeout (:func:`framework.parallel.make_evaluation_runner`)."""
+    (serial, processes, dask), isolation of the model in a worker process (``isolate: auto``:
+    when the structure is user code, ``names_code``) and the per-evaluation timeout
+    (:func:`framework.study.schema.evaluation_isolation`, :func:`framework.parallel.make_evaluation_runner`)."""
     from framework.parallel import make_evaluation_runner
 
+    isolate, timeout_s = evaluation_isolation(execution, names_code)
     return make_evaluation_runner(
         execution.get("evaluation_backend", "serial"),
         workers=execution.get("workers", 2),
-        isolate=bool(execution.get("isolate", False)),
-        timeout_s=execution.get("evaluation_timeout_s"),
+        isolate=isolate,
+        timeout_s=timeout_s,
         scheduler=execution.get("scheduler"),
     )
 
@@ -362,7 +377,9 @@ def evaluation_runner(execution: dict):
 def run(spec: dict) -> dict[str, list[dict]]:
     """One optimizer run and the rows of every table."""
     task = spec["task"]
-    runner, close = evaluation_runner(task.get("execution", {}))
+    name = task["structure"]["name"]
+    user_code = is_reference(name) and not name.startswith("framework.")  # isolate: auto
+    runner, close = evaluation_runner(task.get("execution", {}), user_code)
     try:
         return _run(spec, task, runner)
     finally:
