@@ -73,6 +73,24 @@ def test_hybrid_candidates_are_distinct_and_best_first():
     np.testing.assert_allclose(cands[0]["x_start"], best, rtol=0, atol=0)
 
 
+def test_hybrid_caps_each_polish_and_refines_the_best_polished_points():
+    budget = Budget(max_evaluations=1200)
+    r = run_optimizer("hybrid", lab_problem(), 3, budget,
+                      **hybrid("screening", {}, 300, n_candidates=4, max_evaluations_per_candidate=40, refine=2))
+    cols = r.extra["run_columns"]
+    cands = [r.extra[f"candidate_{i}"] for i in range(1, 7)]
+    assert all(c["n_evaluations"] <= 40 for c in cands[:4]) and "refines" not in cands[0]
+    first = sorted(cands[:4], key=lambda c: c["polished_objective"])
+    # candidates 5 and 6 continue the two best polished points, from where they ended
+    assert [c["refines"] for c in cands[4:]] == [first[0]["candidate"], first[1]["candidate"]]
+    for c in cands[4:]:
+        np.testing.assert_array_equal(c["x_start"], r.extra[f"candidate_{c['refines']}"]["x_polished"])
+        assert c["polished_objective"] <= r.extra[f"candidate_{c['refines']}"]["polished_objective"]
+    assert cols["global_evaluations"] + cols["local_evaluations"] == r.n_evaluations <= 1200
+    assert r.objective == min(c["polished_objective"] for c in cands)
+    assert cols["best_candidate"] in (5, 6) and cols["n_polished"] == 6
+
+
 def test_distinct_best_picks_in_order_and_skips_near_points():
     X = np.array([[0.0, 0.0], [0.05, 0.0], [1.0, 1.0], [0.5, 0.5], [0.9, 1.0]])
     values = np.array([1.0, 0.5, 3.0, np.nan, 2.0])
@@ -106,7 +124,8 @@ def test_hybrid_settings_are_checked(settings, message):
 
 def test_hybrid_settings_dump_by_their_config_names():
     dumped = settings_model("hybrid").model_validate(hybrid("pso")).model_dump(mode="json")
-    assert set(dumped) == {"global", "local", "n_candidates", "min_distance"}
+    assert set(dumped) == {"global", "local", "n_candidates", "min_distance", "max_evaluations_per_candidate",
+                           "refine"}
     assert dumped["global"]["settings"]["swarm_size"] == 20 and "x0" not in dumped["local"]["settings"]
     assert settings_model("hybrid").model_validate(dumped, strict=True).model_dump(mode="json") == dumped
 
