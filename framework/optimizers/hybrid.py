@@ -10,15 +10,16 @@ One run has two phases within the run's evaluation budget ``max_evaluations``:
 2. **Local phase**: the sensitivity method (:mod:`framework.optimizers.sm`, ``local.settings``,
    e.g. its ``diff_step``, or its Jacobian choice where available) from each of the
    ``n_candidates`` best *distinct* points of the global phase, best first. Candidate c is
-   given the evaluations left divided by the candidates still to polish plus ``refine``
-   (unused evaluations roll over), at most ``max_evaluations_per_candidate``, under the
-   run's termination rule.
+   given the evaluations left divided by the candidates still to polish (unused evaluations
+   roll over), at most ``max_evaluations_per_candidate``, under the run's termination rule.
 3. **Refinement** (``refine`` = r > 0, ours): SM again from the end points of the r best
    polished candidates (best first), each with the evaluations left divided by the
-   refinements still to run. A short first polish of many candidates sorts the basins, the
-   refinement spends the rest of the budget where it pays (SM converges slowly near a
-   minimum with many parameters on their bounds, e.g. the footbridge). Recorded as
-   candidates n_candidates + 1, ... with ``refines`` naming the candidate continued.
+   refinements still to run (unused evaluations roll over; none below k + 2). A short
+   first polish of many candidates sorts the basins, the refinement spends the rest of the
+   budget where it pays (SM converges slowly near a minimum with many parameters on their
+   bounds, e.g. the footbridge). The first polish then shares the evaluations left divided
+   by the candidates still to polish plus one. Recorded as candidates n_candidates + 1, ...
+   with ``refines`` naming the candidate continued.
 
 Distinct candidates: sorted by objective, a point is taken if its normalized distance to
 every point already taken is larger than ``min_distance``,
@@ -215,7 +216,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         record = {"candidate": c + 1, "x_start": x0.tolist(), "theta_start": params.to_physical(x0).tolist(),
                   "global_objective": float(values[i]),
                   "distance_to_first": float(np.linalg.norm(x0 - X[picks[0]]) / np.sqrt(len(x0)))}
-        share = int(evaluator.remaining // (len(picks) - c + s.refine))
+        share = int(evaluator.remaining // (len(picks) - c + (1 if s.refine else 0)))
         if s.max_evaluations_per_candidate is not None:
             share = min(share, s.max_evaluations_per_candidate)
         if share < evaluator.cost:
@@ -238,10 +239,11 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
 
     polished = [r for r in candidates if r.get("polished_objective") is not None]
     polished.sort(key=lambda r: r["polished_objective"])
-    for j, start in enumerate(polished[: s.refine]):
-        if evaluator.remaining < evaluator.cost:
+    chosen = polished[: s.refine]
+    for j, start in enumerate(chosen):
+        share = int(evaluator.remaining // (len(chosen) - j))
+        if share < evaluator.n_params + 2:  # not even one forward-difference iteration
             break
-        share = int(evaluator.remaining // (min(s.refine, len(polished)) - j))
         record = _refine(evaluator, seed, budget, s, start, len(candidates) + 1, share)
         candidates.append(record)
         iterations += record["n_iterations"]
