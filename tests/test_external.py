@@ -60,6 +60,17 @@ def test_footbridge_condensation_equals_shift_invert():
     np.testing.assert_allclose(cos, 1.0, atol=1e-8)
 
 
+def test_footbridge_reused_ldl_equals_shift_invert_at_random_points():
+    pytest.importorskip("qdldl")
+    a, b = smu.make_footbridge(solver="shift_invert"), smu.make_footbridge(solver="shift_invert_ldl")
+    rng = np.random.default_rng(5)
+    for x in rng.random((4, 17)):
+        theta = dict(zip(a.parameters.names, a.parameters.to_physical(x)))
+        ra, rb = a.modal(theta), b.modal(theta)
+        np.testing.assert_allclose(rb.frequencies_hz, ra.frequencies_hz, rtol=1e-10)
+        np.testing.assert_allclose(np.abs(rb.shapes), np.abs(ra.shapes), rtol=0, atol=1e-9 * np.abs(ra.shapes).max())
+
+
 def test_footbridge_mac_matching_pairs_the_swapped_modes():
     model = smu.make_footbridge(n_modes=8)
     spec = ObjectiveSpec(formulation="reference", options={"matching": "mac"}, unmatched_penalty=1e4)

@@ -73,6 +73,28 @@ def test_hybrid_candidates_are_distinct_and_best_first():
     np.testing.assert_allclose(cands[0]["x_start"], best, rtol=0, atol=0)
 
 
+def test_hybrid_caps_each_polish_and_refines_the_best_polished_points():
+    budget = Budget(max_evaluations=1200)
+    r = run_optimizer("hybrid", lab_problem(), 3, budget,
+                      **hybrid("screening", {}, 300, n_candidates=4, max_evaluations_per_candidate=40, refine=2))
+    cols = r.extra["run_columns"]
+    cands = [r.extra[f"candidate_{i}"] for i in range(1, cols["n_polished"] + 1)]
+    assert all(c["n_evaluations"] <= 40 for c in cands[:4]) and not any("refines" in c for c in cands[:4])
+    first = sorted(cands[:4], key=lambda c: c["polished_objective"])
+    refined = cands[4:]
+    # refinements continue the best polished points in order, from where they ended; the first
+    # is given every evaluation left, the next one runs only on what the first left over
+    assert 1 <= len(refined) <= 2
+    assert [c["refines"] for c in refined] == [c["candidate"] for c in first[: len(refined)]]
+    for c in refined:
+        np.testing.assert_array_equal(c["x_start"], r.extra[f"candidate_{c['refines']}"]["x_polished"])
+        assert c["polished_objective"] <= r.extra[f"candidate_{c['refines']}"]["polished_objective"]
+    assert refined[0]["n_evaluations"] > 40
+    assert cols["global_evaluations"] + cols["local_evaluations"] == r.n_evaluations <= 1200
+    assert r.objective == min(c["polished_objective"] for c in cands)
+    assert r.extra[f"candidate_{cols['best_candidate']}"]["polished_objective"] == r.objective
+
+
 def test_distinct_best_picks_in_order_and_skips_near_points():
     X = np.array([[0.0, 0.0], [0.05, 0.0], [1.0, 1.0], [0.5, 0.5], [0.9, 1.0]])
     values = np.array([1.0, 0.5, 3.0, np.nan, 2.0])
@@ -106,7 +128,8 @@ def test_hybrid_settings_are_checked(settings, message):
 
 def test_hybrid_settings_dump_by_their_config_names():
     dumped = settings_model("hybrid").model_validate(hybrid("pso")).model_dump(mode="json")
-    assert set(dumped) == {"global", "local", "n_candidates", "min_distance"}
+    assert set(dumped) == {"global", "local", "n_candidates", "min_distance", "max_evaluations_per_candidate",
+                           "refine"}
     assert dumped["global"]["settings"]["swarm_size"] == 20 and "x0" not in dumped["local"]["settings"]
     assert settings_model("hybrid").model_validate(dumped, strict=True).model_dump(mode="json") == dumped
 
@@ -259,3 +282,15 @@ def test_failed_points_are_never_the_result(algorithm):
     r = run_optimizer(algorithm, problem, 2, Budget(max_evaluations=300), **SETTINGS[algorithm])
     assert r.n_failed > 0 and r.status not in ("failed", "target") and r.objective > 1e-9
     assert problem.evaluate(r.x_best[None, :]).ok[0]
+
+
+def test_sm_x_scale_setting():
+    """x_scale "unit" is least_squares' default for trf (identical runs); "jac" scales by the Jacobian."""
+    problem, budget = lab_problem(), Budget(max_evaluations=400)
+    default = run_optimizer("sm", problem, 1, budget, start="random")
+    unit = run_optimizer("sm", problem, 1, budget, start="random", x_scale="unit")
+    np.testing.assert_array_equal(unit.history, default.history)
+    jac = run_optimizer("sm", problem, 1, budget, start="random", x_scale="jac")
+    assert jac.objective < 1e-4 and jac.n_evaluations <= 400
+    with pytest.raises(Exception, match="x_scale"):
+        settings_model("sm").model_validate({"x_scale": "auto"}, strict=True)

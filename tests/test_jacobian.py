@@ -112,12 +112,16 @@ def test_four_story_jacobian(options):
 
 
 @needs_smu
-@pytest.mark.parametrize("shape_term", ["mac", "eigenvector"])
-def test_footbridge_jacobian(shape_term):
-    """946 DOFs, singular M (474 massless DOFs), 17 parameters, sparse Nelson."""
+@pytest.mark.parametrize("shape_term, solver", [("mac", "shift_invert"), ("eigenvector", "shift_invert"),
+                                                ("mac", "shift_invert_ldl")])
+def test_footbridge_jacobian(shape_term, solver):
+    """946 DOFs, singular M (474 massless DOFs), 17 parameters, sparse Nelson; also on the
+    modes of the reused-LDL' solver."""
+    if solver == "shift_invert_ldl":
+        pytest.importorskip("qdldl")
     spec = ObjectiveSpec(formulation="reference",
                          options={"matching": "order", "weights": "std", "shape_term": shape_term})
-    problem = UpdatingProblem(smu.make_footbridge(), smu.footbridge_measured(), objective=spec)
+    problem = UpdatingProblem(smu.make_footbridge(solver=solver), smu.footbridge_measured(), objective=spec)
     x = problem.x_initial + np.random.default_rng(2).uniform(-0.05, 0.05, problem.n_params)
     assert problem.jacobian(x).cost == 5  # one factorization per measured mode
     assert_agrees(problem, x, 1e-3)

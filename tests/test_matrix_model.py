@@ -86,6 +86,55 @@ def test_shift_invert_agrees_with_condensation_for_singular_mass():
     assert ra.mode_info["eigenvalue"] == pytest.approx((2 * math.pi * ra.frequencies_hz) ** 2, rel=1e-12)
 
 
+def _ldl_pair(n: int = 60, **kwargs):
+    parts, M, _, _ = _chain(n)
+    params = _params(n, -0.9, 0.5)
+    dofs = {f"n{i}": i for i in (0, 10, 20, n - 2)}
+    a = MatrixModel(parts, M, params, dofs, n_modes=6, solver="shift_invert", **kwargs)
+    b = MatrixModel(parts, M, params, dofs, n_modes=6, solver="shift_invert_ldl", **kwargs)
+    return a, b
+
+
+def test_reused_ldl_path_equals_shift_invert_at_many_points():
+    pytest.importorskip("qdldl")
+    a, b = _ldl_pair()
+    rng = np.random.default_rng(3)
+    for _ in range(5):  # one symbolic analysis, five numeric refactorizations
+        theta = dict(zip(a.parameters.names, rng.uniform(-0.9, 0.5, 60)))
+        (la_, pa), (lb, pb) = a.eigen(theta), b.eigen(theta)
+        np.testing.assert_allclose(lb, la_, rtol=1e-10)
+        cos = np.abs(np.sum(pa * (a.mass @ pb), 0))  # mass-normalized: |phi_a' M phi_b| = 1
+        np.testing.assert_allclose(cos, 1.0, atol=1e-10)
+    assert b.__dict__["_ldl"] is not None
+    import pickle
+
+    c = pickle.loads(pickle.dumps(b))  # the factorization is rebuilt in the receiving process
+    assert "_ldl" not in c.__dict__
+    np.testing.assert_array_equal(c.eigen(theta)[0], lb)
+
+
+def test_reused_ldl_path_falls_back_on_an_indefinite_stiffness_and_without_qdldl(monkeypatch, caplog):
+    pytest.importorskip("qdldl")
+    from framework.models import repeated_eigen
+
+    a, b = _ldl_pair()
+    singular = {"alpha_1": -1.0}  # the ground spring removed: K singular (a mechanism), round-off pivot
+    with pytest.raises(repeated_eigen.NotApplicable, match="not clearly positive definite"):
+        b._reused_ldl().factor(b.stiffness_matrix(singular))
+    np.testing.assert_array_equal(b.eigen(singular)[0], a.eigen(singular)[0])  # handed to today's path
+    indefinite = b.stiffness(np.r_[-1.5, np.zeros(59)])  # a negative ground spring
+    with pytest.raises(repeated_eigen.NotApplicable, match="not clearly positive definite"):
+        b._reused_ldl().factor(indefinite)
+    monkeypatch.setattr(repeated_eigen, "available", lambda: False)
+    _, plain = _ldl_pair()
+    with caplog.at_level("WARNING"):
+        lam = plain.eigen({"alpha_2": 0.2})[0]
+    assert "needs the optional package qdldl" in caplog.text
+    np.testing.assert_array_equal(lam, a.eigen({"alpha_2": 0.2})[0])  # exactly today's path
+    _, shifted = _ldl_pair(sigma=1.0)  # a nonzero shift: today's path
+    np.testing.assert_allclose(shifted.eigen({})[0], a.eigen({})[0], rtol=1e-10)
+
+
 def test_two_storey_shear_building_closed_form():
     """Equal m and k: omega^2 = (k/m)(3 -+ sqrt 5)/2; alpha_1 = 1 doubles storey 1."""
     m, k = 2.0, 800.0

@@ -14,7 +14,12 @@ with lumped translational masses). Modes solve K phi = omega^2 M phi, f = omega 
 - ``solver="condensation"`` (dense): exact static condensation of the massless DOFs s,
   K_c = K_mm - K_ms K_ss^-1 K_sm, then eigh(K_c, M_mm); shapes at s are recovered as
   phi_s = -K_ss^-1 K_sm phi_m;
-- ``solver="auto"``: condensation up to ``DENSE_LIMIT`` DOFs, shift-invert above.
+- ``solver="auto"``: condensation up to ``DENSE_LIMIT`` DOFs, shift-invert above;
+- ``solver="shift_invert_ldl"`` (ours, for repeated solves): the same shift-invert Lanczos at
+  shift 0 with K^-1 from an LDL' factorization whose symbolic analysis is done once per model
+  and process (:mod:`framework.models.repeated_eigen`, optional package ``qdldl``); falls back
+  to "shift_invert" for a K that is not positive definite, a nonzero ``sigma`` or without
+  ``qdldl``.
 
 Measured DOFs are given by 0-based index with a label each. The model is picklable and
 stateless between calls (the matrices are read-only inputs).
@@ -50,6 +55,9 @@ log = logging.getLogger(__name__)
 
 #: Up to this many DOFs the dense condensation solver is used by ``solver="auto"``.
 DENSE_LIMIT = 200
+
+#: Eigen solvers of a MatrixModel (module docstring).
+SOLVERS = ("auto", "shift_invert", "condensation", "shift_invert_ldl")
 
 
 def _as_csc(matrix, where: str) -> sp.csc_matrix:
@@ -213,8 +221,8 @@ class MatrixModel:
         sigma: float = 0.0,
         name: str = "matrix_model",
     ):
-        if solver not in ("auto", "shift_invert", "condensation"):
-            raise InputError(f"solver must be 'auto', 'shift_invert' or 'condensation', got {solver!r}")
+        if solver not in SOLVERS:
+            raise InputError(f"solver must be one of {', '.join(map(repr, SOLVERS))}, got {solver!r}")
         if len(stiffness_parts) != len(parameters):
             raise InputError(
                 f"stiffness_parts: {len(stiffness_parts)} matrices for {len(parameters)} parameters {parameters.names}"
@@ -259,7 +267,34 @@ class MatrixModel:
         K = self.stiffness_matrix(theta)
         if self.solver == "condensation":
             return solve_condensation(K, self.mass, self.n_modes)
+        if self.solver == "shift_invert_ldl" and self.sigma == 0.0:
+            ldl = self._reused_ldl()
+            if ldl is not None:
+                from framework.models.repeated_eigen import NotApplicable, lowest_modes
+
+                try:
+                    return lowest_modes(K, self.mass, self.n_modes, ldl)
+                except NotApplicable as exc:
+                    log.debug("%s: reused LDL' path not applicable (%s); shift-invert from scratch", self.name, exc)
         return solve_shift_invert(K, self.mass, self.n_modes, self.sigma)
+
+    def _reused_ldl(self):
+        """The model's reused LDL' factorization (built once per process), None without qdldl."""
+        if "_ldl" not in self.__dict__:
+            from framework.models import repeated_eigen
+
+            if repeated_eigen.available():
+                self._ldl = repeated_eigen.ReusedLDL(self.stiffness(np.zeros(self.stiffness.n_parts)))
+            else:
+                log.warning("%s: solver 'shift_invert_ldl' needs the optional package qdldl (extra 'fast'); "
+                            "using 'shift_invert'", self.name)
+                self._ldl = None
+        return self._ldl
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_ldl", None)  # rebuilt in the receiving process
+        return state
 
     def modal(self, theta: Mapping[str, float]) -> ModalResult:
         """Modes at ``theta``; meta["eigenvectors"] keeps the full mass-normalized shapes (n_dof, n_modes)

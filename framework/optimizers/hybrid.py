@@ -11,7 +11,15 @@ One run has two phases within the run's evaluation budget ``max_evaluations``:
    e.g. its ``diff_step``, or its Jacobian choice where available) from each of the
    ``n_candidates`` best *distinct* points of the global phase, best first. Candidate c is
    given the evaluations left divided by the candidates still to polish (unused evaluations
-   roll over), under the run's termination rule.
+   roll over), at most ``max_evaluations_per_candidate``, under the run's termination rule.
+3. **Refinement** (``refine`` = r > 0, ours): SM again from the end points of the r best
+   polished candidates (best first), each with the evaluations left divided by the
+   refinements still to run (unused evaluations roll over; none below k + 2). A short
+   first polish of many candidates sorts the basins, the refinement spends the rest of the
+   budget where it pays (SM converges slowly near a minimum with many parameters on their
+   bounds, e.g. the footbridge). The first polish then shares the evaluations left divided
+   by the candidates still to polish plus one. Recorded as candidates n_candidates + 1, ...
+   with ``refines`` naming the candidate continued.
 
 Distinct candidates: sorted by objective, a point is taken if its normalized distance to
 every point already taken is larger than ``min_distance``,
@@ -111,6 +119,8 @@ class HybridSettings(Settings):
     local: LocalPhase = Field(default_factory=LocalPhase)
     n_candidates: int = Field(3, ge=1)
     min_distance: float = Field(0.1, ge=0, le=1)
+    max_evaluations_per_candidate: int | None = Field(None, gt=0)
+    refine: int = Field(0, ge=0)
 
 
 class _Recorder(Evaluator):
@@ -147,6 +157,26 @@ def distinct_best(X: np.ndarray, values: np.ndarray, n: int, min_distance: float
         chosen.append(int(i))
         free &= np.linalg.norm(X - X[i], axis=1) / np.sqrt(k) > min_distance
     return chosen
+
+
+def _refine(evaluator, seed: int, budget: Budget, s: HybridSettings, best: dict, number: int, share: int) -> dict:
+    """SM again from a polished point with ``share`` evaluations (``refine``); its record is
+    numbered after the candidates, with ``refines`` naming the candidate it continues."""
+    x0 = np.asarray(best["x_polished"], dtype=float)
+    child = Evaluator(evaluator.problem, share, parent=evaluator)
+    out = sm.run(child, seed, budget.model_copy(update={"max_evaluations": share}), x0=x0.tolist(),
+                 **s.local.settings)
+    params = evaluator.parameters
+    return {
+        "candidate": number,
+        "refines": best["candidate"], "x_start": x0.tolist(), "theta_start": params.to_physical(x0).tolist(),
+        "global_objective": best["global_objective"], "distance_to_first": best["distance_to_first"],
+        "polished_objective": float(child.best_objective) if child.has_success else None,
+        "x_polished": None if child.best_x is None else child.best_x.tolist(),
+        "theta_polished": None if child.best_x is None else params.to_physical(child.best_x).tolist(),
+        "n_evaluations": child.n_evaluations, "n_iterations": out.n_iterations, "status": out.status,
+        "_extra": out.extra,
+    }
 
 
 def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
@@ -186,7 +216,9 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         record = {"candidate": c + 1, "x_start": x0.tolist(), "theta_start": params.to_physical(x0).tolist(),
                   "global_objective": float(values[i]),
                   "distance_to_first": float(np.linalg.norm(x0 - X[picks[0]]) / np.sqrt(len(x0)))}
-        share = int(evaluator.remaining // (len(picks) - c))
+        share = int(evaluator.remaining // (len(picks) - c + (1 if s.refine else 0)))
+        if s.max_evaluations_per_candidate is not None:
+            share = min(share, s.max_evaluations_per_candidate)
         if share < evaluator.cost:
             candidates.append({**record, "status": "not_run", "n_evaluations": 0, "polished_objective": None})
             continue
@@ -205,6 +237,20 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         if polished is not None and polished < best_value:
             best_c, best_value, best_extra, best_status = c + 1, polished, out.extra, out.status
 
+    polished = [r for r in candidates if r.get("polished_objective") is not None]
+    polished.sort(key=lambda r: r["polished_objective"])
+    chosen = polished[: s.refine]
+    for j, start in enumerate(chosen):
+        share = int(evaluator.remaining // (len(chosen) - j))
+        if share < evaluator.n_params + 2:  # not even one forward-difference iteration
+            break
+        record = _refine(evaluator, seed, budget, s, start, len(candidates) + 1, share)
+        candidates.append(record)
+        iterations += record["n_iterations"]
+        extra_j = record.pop("_extra")
+        if record["polished_objective"] is not None and record["polished_objective"] < best_value:
+            best_c, best_value, best_extra, best_status = record["candidate"], record["polished_objective"], extra_j, \
+                record["status"]
     local_evaluations = sum(r["n_evaluations"] for r in candidates)
     status = best_status if best_c is not None else "budget"
     extra: dict[str, Any] = {"global": global_record}

@@ -62,6 +62,9 @@ class SMSettings(Settings):
     xtol: float = Field(1e-10, gt=0)
     gtol: float = Field(1e-10, gt=0)
     jacobian: Literal["auto", "exact", "fd"] = "auto"
+    # least_squares' variable scaling: "unit" (default) or "jac" (ours: scaled by the Jacobian's
+    # column norms, faster along the footbridge's flat valleys with parameters on their bounds)
+    x_scale: Literal["unit", "jac"] = "unit"
     # pseudo-inverse iteration only: convergence on the projected step (normalized), pinv cut-off
     step_tolerance: float = Field(1e-6, gt=0)
     pinv_rcond: float = Field(1e-12, gt=0, lt=1)
@@ -143,6 +146,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
             jac=jacobian_argument(evaluator, method, s.diff_step),
             bounds=(0.0, 1.0),
             method="trf",
+            x_scale=1.0 if s.x_scale == "unit" else "jac",
             diff_step=s.diff_step,
             ftol=s.ftol,
             xtol=s.xtol,
