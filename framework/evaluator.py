@@ -150,14 +150,19 @@ class Evaluator:
             jac = problem.jacobian(x, self.runner, result, fd_step=fd_step, fallback=False)
             if jac.J is not None:
                 self._record_cost(jac.cost)
-                self.n_jacobians += 1
-                self.jacobian_methods[jac.method] += 1
+                self.count_jacobians(jac.method)
                 return jac.J
         X, h = fd_points(x, fd_step)
         fd = self.evaluate(X)
-        self.n_jacobians += 1
-        self.jacobian_methods["fd"] += 1
+        self.count_jacobians("fd")
         return (fd.residuals - r0[None, :]).T / h[None, :]
+
+    def count_jacobians(self, method: str, n: int = 1) -> None:
+        """Count n Jacobians of kind ``method`` here and in every parent (as evaluations are)."""
+        self.n_jacobians += n
+        self.jacobian_methods[method] += n
+        if self.parent is not None:
+            self.parent.count_jacobians(method, n)
 
     def _record_cost(self, n: int) -> None:
         """Count n evaluation equivalents that bring no new objective value (an exact Jacobian)."""

@@ -294,3 +294,11 @@ def test_sm_x_scale_setting():
     assert jac.objective < 1e-4 and jac.n_evaluations <= 400
     with pytest.raises(Exception, match="x_scale"):
         settings_model("sm").model_validate({"x_scale": "auto"}, strict=True)
+
+
+def test_hybrid_counts_the_jacobians_of_its_polishing_runs():
+    r = run_optimizer("hybrid", lab_problem(), 0, Budget(max_evaluations=2000),
+                      **hybrid("screening", {"sampler": "sobol"}, 256, n_candidates=2))
+    polished = [r.extra[f"candidate_{i}"] for i in (1, 2)]
+    # each SM iteration of a polish differences one Jacobian (the lab frame has no exact one)
+    assert r.n_jacobians >= sum(c["n_iterations"] for c in polished) > 0

@@ -162,7 +162,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
             status = "converged"
         n_iter = int(res.njev)
         if method == "fd":  # least_squares differenced by itself: its Jacobians are counted here
-            evaluator.n_jacobians += n_iter
+            evaluator.count_jacobians("fd", n_iter)
         message = str(res.message)
         J = np.asarray(res.jac)
         extra["condition_number"] = float(np.linalg.cond(J)) if J.size else float("nan")
@@ -173,7 +173,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         # iterations = Jacobians computed (least_squares' njev: 1 + accepted steps)
         n_iter = evaluator.n_jacobians if method == "exact" else termination.iterations + 1
         if method == "fd":
-            evaluator.n_jacobians += n_iter
+            evaluator.count_jacobians("fd", n_iter)
         status, message = "budget", "evaluation budget exhausted"
     if method == "exact":
         extra["jacobian_methods"] = dict(evaluator.jacobian_methods)
