@@ -43,7 +43,7 @@ def _cmd_run(args) -> int:
 def _cmd_report(args) -> int:
     from framework.study.runner import report
 
-    files = report(Path(args.results_dir))
+    files = report(Path(args.results_dir), shapes=args.shapes)
     for f in files:
         sys.stdout.write(f"{f}\n")
     return 0
@@ -97,6 +97,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     rep = sub.add_parser("report", help="regenerate all figures from a results folder's tables")
     rep.add_argument("results_dir")
+    rep.add_argument("--shapes", action="store_true",
+                     help="(re)compute the mode-shape tables first (builds the model; for folders of earlier versions)")
     rep.set_defaults(fn=_cmd_report)
 
     v = sub.add_parser("validate", help="check a config and its data without running anything")

@@ -84,24 +84,24 @@ def auto_mac_model_figure(mac: pd.DataFrame, path: Path) -> Path | None:
 
 
 def comac_figure(comac: pd.DataFrame, geometry: pd.DataFrame | None, path: Path) -> Path | None:
-    """COMAC per DOF (bars, one colour per state) and, where DOFs have positions, on the geometry."""
+    """COMAC per DOF (a marker per state) and, where DOFs have positions, on the geometry."""
     if comac.empty or comac["comac"].isna().all():
         return None
     states = list(dict.fromkeys(comac["state"]))
     dofs = list(dict.fromkeys(comac["dof"]))
     located = comac.dropna(subset=["x", "y", "z"])
     on_geometry = geometry is not None and not geometry.empty and located["dof"].nunique() > 3
-    fig = plt.figure(figsize=(max(6.0, 0.22 * len(dofs) + 3), 3.8 + (4.0 if on_geometry else 0)))
-    ax = fig.add_subplot(2 if on_geometry else 1, 1, 1)
-    width = 0.8 / len(states)
+    fig = plt.figure(figsize=(max(6.0, 0.22 * len(dofs) + 3), 4.0 + (5.0 if on_geometry else 0)))
+    ax = fig.add_axes([0.1, 0.62, 0.85, 0.33] if on_geometry else [0.1, 0.25, 0.85, 0.65])
     for k, state in enumerate(states):
         d = comac[comac["state"] == state].set_index("dof").reindex(dofs)
         n_pairs = int(d["n_pairs"].max())
-        ax.bar(np.arange(len(dofs)) + (k - (len(states) - 1) / 2) * width, d["comac"], width,
-               label=f"{state} ({n_pairs} paired modes)")
+        ax.plot(np.arange(len(dofs)), d["comac"], "os^D"[k % 4], ms=5, mfc="none" if k else None,
+                label=f"{state} ({n_pairs} paired modes)")
+    low = float(np.nanmin(comac["comac"]))
     ax.set_xticks(range(len(dofs)), dofs, rotation=90, fontsize=6 if len(dofs) > 20 else 8)
-    ax.set(ylim=(0, 1.02), ylabel="COMAC", xlabel="measured DOF",
-           title="COMAC by measured DOF (1 = the DOF agrees in every paired mode)")
+    ax.set(ylim=(max(0.0, low - 0.15 * (1 - low) - 0.005), 1.0 + 0.05 * (1 - low) + 0.001), ylabel="COMAC",
+           title="COMAC by measured DOF (1 = the DOF agrees in every paired mode; axis from the lowest value)")
     ax.legend(fontsize=7, loc="lower left")
     if on_geometry:
         from framework.figures.shapes import Geometry, _draw_structure, _frame
@@ -111,18 +111,16 @@ def comac_figure(comac: pd.DataFrame, geometry: pd.DataFrame | None, path: Path)
         d = located[located["state"] == state]
         points = d.groupby(["x", "y", "z"], as_index=False)["comac"].min()
         kw = {"projection": "3d"} if geo.is_3d else {}
-        gax = fig.add_subplot(2, 1, 2, **kw)
+        gax = fig.add_axes([0.05, 0.02, 0.8, 0.45], **kw)
         _draw_structure(gax, geo, None, 0.0, set())
+        colours = dict(c=points["comac"], cmap="RdYlGn", vmin=max(0.0, low - 0.05), vmax=1.0, s=30)
         if geo.is_3d:
-            sc = gax.scatter(points["x"], points["y"], points["z"], c=points["comac"], cmap="RdYlGn", vmin=0,
-                             vmax=1, s=30, depthshade=False)
+            sc = gax.scatter(points["x"], points["y"], points["z"], depthshade=False, **colours)
         else:
             a, b = geo.axes
             cols = ["x", "y", "z"]
-            sc = gax.scatter(points[cols[a]], points[cols[b]], c=points["comac"], cmap="RdYlGn", vmin=0, vmax=1,
-                             s=30, zorder=5)
+            sc = gax.scatter(points[cols[a]], points[cols[b]], zorder=5, **colours)
         fig.colorbar(sc, ax=gax, shrink=0.7, label=f"COMAC ({state}; lowest DOF at each sensor)")
         gax.set_title(f"COMAC at the sensors ({state} parameters)", fontsize=9)
         _frame(gax, geo)
-    fig.tight_layout() if not on_geometry else None
     return save_figure(fig, path)

@@ -122,8 +122,9 @@ def derive(out: Path, tables: dict[str, pd.DataFrame], cfg: StudyHeader, figures
     return written
 
 
-def report(results_dir: str | Path) -> list[Path]:
-    """Redo the analyses and figures of a results folder from its tables and config.yaml."""
+def report(results_dir: str | Path, shapes: bool = False) -> list[Path]:
+    """Redo the analyses and figures of a results folder from its tables and config.yaml;
+    ``shapes``: first (re)write the mode-shape tables (builds the model)."""
     from framework.study.config import validate
 
     root = Path(results_dir)
@@ -141,6 +142,10 @@ def report(results_dir: str | Path) -> list[Path]:
     tables = read_tables(root, kind.TABLES)
     if not tables or all(df.empty for df in tables.values()):
         raise InputError(f"{root}: no result tables to report on")
+    if not (root / "provenance.json").exists():
+        write_provenance(root, by="report")
+    if shapes:
+        write_shape_tables(root, tables, cfg)
     return derive(root, tables, cfg)
 
 
