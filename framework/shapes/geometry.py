@@ -156,6 +156,8 @@ def _opensees_geometry(model, theta: Mapping[str, float], base: ModelShapes) -> 
     node_groups, element_groups = _groups(info)
     f_domain = np.sqrt(np.maximum(omega2, 0.0)) / (2 * math.pi)
     base.node_tags, base.coords = tags, _spread_degenerate(coords, tags)
+    if base.coords is not coords:
+        base.length_unit = "node index (the model has no coordinates)"
     base.node_shapes = _align(base, f_domain, sensor, U)
     base.elements = [(e, nodes, element_groups.get(e) or _group_of(nodes, node_groups)) for e, nodes in elements]
     base.node_groups = node_groups
