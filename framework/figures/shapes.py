@@ -71,7 +71,9 @@ def _axes(fig, n: int, is_3d: bool):
     rows = math.ceil(n / cols)
     fig.set_size_inches(4.4 * cols, 4.0 * rows)
     kw = {"projection": "3d"} if is_3d else {}
-    return [fig.add_subplot(rows, cols, i + 1, **kw) for i in range(n)]
+    axes = [fig.add_subplot(rows, cols, i + 1, **kw) for i in range(n)]
+    fig.subplots_adjust(hspace=0.55 if not is_3d else 0.3, wspace=0.3)
+    return axes
 
 
 def _plot_line(ax, pts: np.ndarray, geo: Geometry, **kw):

@@ -221,8 +221,8 @@ def _groups(info) -> tuple[dict[int, str], dict[int, str]]:
     items = info.items() if isinstance(info, dict) else (vars(info).items() if hasattr(info, "__dict__") else ())
     nodes, elements = {}, {}
     for key, value in items:
-        if not isinstance(key, str):
-            continue
+        if not isinstance(key, str) or not isinstance(value, (list, tuple, set, dict)):
+            continue  # a count such as n_elements is not a group
         if key.endswith("_elements"):
             for e in _members(value):
                 elements.setdefault(e, key.removesuffix("_elements"))
