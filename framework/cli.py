@@ -44,6 +44,10 @@ def _cmd_report(args) -> int:
     from framework.study.runner import report
 
     files = report(Path(args.results_dir), shapes=args.shapes)
+    if args.html:
+        from framework.figures.interactive import all_html
+
+        files += all_html(Path(args.results_dir))
     for f in files:
         sys.stdout.write(f"{f}\n")
     return 0
@@ -99,6 +103,8 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("results_dir")
     rep.add_argument("--shapes", action="store_true",
                      help="(re)compute the mode-shape tables first (builds the model; for folders of earlier versions)")
+    rep.add_argument("--html", action="store_true",
+                     help="also write interactive 3-D mode shapes (shapes_<state>.html; needs the viz extra, plotly)")
     rep.set_defaults(fn=_cmd_report)
 
     v = sub.add_parser("validate", help="check a config and its data without running anything")

@@ -139,6 +139,7 @@ def _points_by_mode(ax, df: pd.DataFrame, y: str, ticks: dict[int, str]) -> None
         off = (k - (len(groups) - 1) / 2) * width
         for m in modes:
             vals = g.loc[g["mode"] == m, y].to_numpy(float)
+            vals = vals[np.isfinite(vals)]
             if vals.size == 0:
                 continue
             x = modes.index(m) + off

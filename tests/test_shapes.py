@@ -75,6 +75,12 @@ def test_opensees_user_model_from_examples_renders_a_mode_shape_figure(tmp_path)
     assert all(f.stat().st_size > 5000 for f in files)
     upd = pd.read_csv(tmp_path / "sensor_shapes.csv").query("state == 'updated'")
     np.testing.assert_allclose(upd["mac"], 1.0, atol=1e-9)
+    pytest.importorskip("plotly")
+    from framework.figures.interactive import all_html
+
+    pages = all_html(tmp_path)
+    assert [p.name for p in pages] == ["shapes_initial.html", "shapes_updated.html"]
+    assert "10.7" in pages[0].read_text()  # the slider names mode 2 by its frequency (10.74 Hz)
 
 
 def test_study_writes_shape_tables_on_resume_and_report_needs_no_model(tmp_path, monkeypatch):

@@ -22,6 +22,9 @@ import pandas as pd  # noqa: E402
 
 from framework.io import save_figure  # noqa: E402
 
+#: resolution of the shape and correlation figures (3-D panels with many lines make big files)
+SHAPE_DPI = 100
+
 MAX_MODES = 20
 
 
@@ -66,7 +69,7 @@ def mac_figure(mac: pd.DataFrame, path: Path) -> Path | None:
     for ax, (title, xl, yl, d) in zip(axes.ravel(), panels):
         im = _heatmap(ax, d, title, xl, yl)
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="MAC")
-    return save_figure(fig, path)
+    return save_figure(fig, path, dpi=SHAPE_DPI)
 
 
 def auto_mac_model_figure(mac: pd.DataFrame, path: Path) -> Path | None:
@@ -80,7 +83,7 @@ def auto_mac_model_figure(mac: pd.DataFrame, path: Path) -> Path | None:
         im = _heatmap(ax, auto[auto["state"] == state], f"auto-MAC of the model modes\nat the sensors ({state})",
                       "model mode", "model mode")
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="MAC")
-    return save_figure(fig, path)
+    return save_figure(fig, path, dpi=SHAPE_DPI)
 
 
 def comac_figure(comac: pd.DataFrame, geometry: pd.DataFrame | None, path: Path) -> Path | None:
@@ -123,4 +126,4 @@ def comac_figure(comac: pd.DataFrame, geometry: pd.DataFrame | None, path: Path)
         fig.colorbar(sc, ax=gax, shrink=0.7, label=f"COMAC ({state}; lowest DOF at each sensor)")
         gax.set_title(f"COMAC at the sensors ({state} parameters)", fontsize=9)
         _frame(gax, geo)
-    return save_figure(fig, path)
+    return save_figure(fig, path, dpi=SHAPE_DPI)

@@ -6,7 +6,7 @@ best run (lowest objective among runs that did not fail): ``initial`` (the param
 initial values) and ``updated`` (that run's parameters), on that run's structure and base
 measured data; a study comparing structures gets them for the best run of each (column
 ``model``: the structure's name). An ``analysis`` study gets them at each of its points (the
-variant of its first successful point of each structure). Other kinds get none. The figures
+variant with the most successful points, per structure). Other kinds get none. The figures
 are drawn from the written tables only (:mod:`framework.figures`), so ``gomu report`` needs no model.
 
 A failure here (a model that cannot be built, say) is logged and leaves the study's tables
@@ -58,10 +58,12 @@ def shape_states(cfg, tables: dict[str, pd.DataFrame]) -> list[tuple[dict, dict[
             best = group.sort_values(["objective", "run_id"]).iloc[0]
             chosen = [("updated", best["run_id"])]
             task = specs[best["run_id"]]["task"]
-        else:
-            first = group.iloc[0]
-            chosen = [(str(r["label"]), r["run_id"]) for _, r in group.iterrows() if r["variant"] == first["variant"]]
-            task = specs[first["run_id"]]["task"]
+        else:  # the variant with the most points (e.g. initial and updated), the first of equals
+            counts = group.groupby("variant", sort=False).size()
+            variant = counts.idxmax()
+            rows = group[group["variant"] == variant]
+            chosen = [(str(r["label"]), r["run_id"]) for _, r in rows.iterrows()]
+            task = specs[rows["run_id"].iloc[0]]["task"]
         problem = build_problem(task)
         names = problem.parameters.names
         states: dict[str, np.ndarray] = {}
