@@ -95,7 +95,7 @@ def parameter_spread(parameters: pd.DataFrame, path: Path) -> None:
         ax.set_xticks(range(len(names)), [f"{p}\ninitial {first.loc[p, 'initial']:.4g} {first.loc[p, 'unit']}"
                                           for p in names], fontsize=7)
     ax.set(ylabel=ylabel, title=f"Updated parameters, one point per run{note}")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     _save(fig, path)
 
 

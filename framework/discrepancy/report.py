@@ -82,8 +82,8 @@ def case_figure(tables: dict[str, pd.DataFrame], path: Path) -> None:
         ax.axvline(10, color="k", ls="--", lw=0.8)
         ax.axvline(0, color="k", lw=0.5)
         ax.set_xscale("symlog", linthresh=10, linscale=1.0)
-        ax.set(xlabel="Delta BIC vs no change (> 0: candidate better; linear to 10, log beyond)",
-               title="candidates (green: named; shading: evidence 2-6, 6-10, > 10 'very strong')")
+        ax.set(xlabel="Delta BIC vs no change (> 0: candidate better; linear to 10, log beyond)")
+        ax.set_title("candidates (green: named); bands: positive 2-6, strong 6-10, very strong > 10", fontsize=9)
         ax.tick_params(axis="y", labelsize=7)
     else:
         ax.text(0.5, 0.5, "no candidates ranked", ha="center")

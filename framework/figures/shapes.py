@@ -32,8 +32,10 @@ SHAPE_DPI = 100
 
 log = logging.getLogger(__name__)
 
-#: largest drawn translation as a fraction of the structure's largest dimension
+#: largest drawn translation as a fraction of the structure's largest dimension (a line of
+#: nodes, a beam or a shear building, gets more)
 DEFORMATION_FRACTION = 0.12
+LINE_DEFORMATION_FRACTION = 0.25
 GROUP_COLOURS = {"deck": "tab:blue", "pylon": "tab:red", "cable": "tab:green", "column": "tab:orange",
                  "slab": "tab:blue", "storey": "tab:blue", "bracket": "tab:purple", "structure": "tab:blue",
                  "connection": "tab:gray", "": "tab:blue"}
@@ -55,6 +57,8 @@ class Geometry:
         span = np.ptp(self.xyz, axis=0) if len(self.xyz) else np.zeros(3)
         self.axes = [k for k in range(3) if span[k] > 1e-9 * max(span.max(), 1e-30)]
         self.is_3d = len(self.axes) == 3
+        #: drawn size of the largest translation, as a fraction of the structure's size
+        self.fraction = DEFORMATION_FRACTION if len(self.axes) > 1 else LINE_DEFORMATION_FRACTION
         if len(self.axes) < 2:  # a line: draw in the plane of that axis and the next one
             first = self.axes[0] if self.axes else 2
             self.axes = sorted({first, (first + 1) % 3})
@@ -141,7 +145,7 @@ def model_modes_figure(geometry: pd.DataFrame, mode_shapes: pd.DataFrame, path: 
         return None
     fig = plt.figure()
     axes = _axes(fig, len(modes), geo.is_3d)
-    scale = DEFORMATION_FRACTION * geo.size
+    scale = geo.fraction * geo.size
     seen: set = set()
     for ax, m in zip(axes, modes):
         d = df[df["mode"] == m]
@@ -153,7 +157,7 @@ def model_modes_figure(geometry: pd.DataFrame, mode_shapes: pd.DataFrame, path: 
     if len(set(labels)) > 1:
         fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8, frameon=False)
     fig.suptitle(f"Model mode shapes ({state} parameters); grey: undeformed; largest translation drawn as "
-                 f"{DEFORMATION_FRACTION:.0%} of the structure's size", fontsize=10, y=1.02)
+                 f"{geo.fraction:.0%} of the structure's size", fontsize=10, y=1.02)
     return save_figure(fig, path, dpi=SHAPE_DPI)
 
 
@@ -171,7 +175,7 @@ def paired_figure(geometry: pd.DataFrame | None, mode_shapes: pd.DataFrame, sens
     df = mode_shapes[mode_shapes["state"] == state]
     fig = plt.figure()
     axes = _axes(fig, len(measured), geo.is_3d)
-    scale = DEFORMATION_FRACTION * geo.size
+    scale = geo.fraction * geo.size
     seen: set = set()
     for ax, i in zip(axes, measured):
         si = s[s["measured_mode"] == i]
@@ -200,7 +204,7 @@ def paired_figure(geometry: pd.DataFrame | None, mode_shapes: pd.DataFrame, sens
     if handles:
         fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8, frameon=False)
     fig.suptitle(f"Measured shapes at the sensors over the paired model modes ({state} parameters); "
-                 f"largest model translation drawn as {DEFORMATION_FRACTION:.0%} of the structure's size",
+                 f"largest model translation drawn as {geo.fraction:.0%} of the structure's size",
                  fontsize=10, y=1.02)
     return save_figure(fig, path, dpi=SHAPE_DPI)
 
@@ -214,7 +218,7 @@ def _paired_channels(s: pd.DataFrame, measured: list, path: Path, state: str) ->
     for ax, i in zip(axes.ravel(), measured):
         si = s[s["measured_mode"] == i].sort_values("x")
         head = si.iloc[0]
-        ax.plot(si["x"], si["model_ux"], "-", color="tab:blue", lw=1, label="model")
+        ax.plot(si["x"], si["model_ux"], "x-", color="tab:blue", lw=0.4, ms=4, label="model (line: channel order)")
         ax.plot(si["x"], si["measured_ux"], "o", color="k", ms=3, label="measured (scaled by MSF)")
         ax.axhline(0, color="0.7", lw=0.6)
         flag = "" if head["matched"] else " UNMATCHED"
