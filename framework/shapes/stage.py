@@ -6,7 +6,8 @@ best run (lowest objective among runs that did not fail): ``initial`` (the param
 initial values) and ``updated`` (that run's parameters), on that run's structure and base
 measured data; a study comparing structures gets them for the best run of each (column
 ``model``: the structure's name). An ``analysis`` study gets them at each of its points (the
-variant with the most successful points, per structure). Other kinds get none. The figures
+variant with the most successful points, per structure). A ``damage`` study (the beam) gets
+them per damaged state for its best estimate (:func:`damage_problems`). Other kinds get none. The figures
 are drawn from the written tables only (:mod:`framework.figures`), so ``gomu report`` needs no model.
 
 A failure here (a model that cannot be built, say) is logged and leaves the study's tables
@@ -26,7 +27,7 @@ from framework.tables import write_table
 
 log = logging.getLogger(__name__)
 
-KINDS = ("updating", "analysis")
+KINDS = ("updating", "analysis", "damage")
 
 
 def shape_states(cfg, tables: dict[str, pd.DataFrame]) -> list[tuple[dict, dict[str, np.ndarray]]]:
@@ -77,6 +78,47 @@ def shape_states(cfg, tables: dict[str, pd.DataFrame]) -> list[tuple[dict, dict[
     return found
 
 
+def damage_problems(cfg, tables: dict[str, pd.DataFrame]) -> list[tuple[str, object, dict[str, np.ndarray]]]:
+    """Beam damage studies (kind ``damage``): per damaged state, the 10-element model against
+    that state's measurement of the best estimate (lowest objective of the first planned
+    variant, e.g. the SPEC's 3 % noise), at the intact ratios (``initial``) and at that
+    method's own updated ratios (``updated``)."""
+    from framework.models import beam
+    from framework.problem import UpdatingProblem
+    from framework.study.kinds import damage
+    from framework.study.plan import plan
+
+    runs, states, elements = (tables.get(n) for n in ("runs", "states", "elements"))
+    if runs is None or states is None or elements is None or states.empty or elements.empty:
+        return []
+    specs = plan(cfg)
+    first_variant = specs[0]["variant"]
+    by_key = {(s["label"], s["variant"], s["seed"]): s for s in specs}
+    keyed = runs.set_index("run_id")
+    out = []
+    for state in damage.DAMAGED:
+        rows = states[(states["state"] == state) & ~states["status"].isin(["failed", "error"])
+                      & np.isfinite(pd.to_numeric(states["objective"], errors="coerce"))]
+        rows = rows[rows["run_id"].map(keyed["variant"]) == first_variant] if "variant" in keyed else rows
+        if rows.empty:
+            continue
+        best = rows.sort_values(["objective", "run_id", "method"]).iloc[0]
+        run = keyed.loc[best["run_id"]]
+        spec = by_key.get((run["label"], run["variant"], int(run["seed"])))
+        if spec is None:
+            continue
+        e = elements[(elements["run_id"] == best["run_id"]) & (elements["method"] == best["method"])
+                     & (elements["state"] == state)].sort_values("element")
+        task = spec["task"]
+        model = beam.make_model(n_modes=max(7, int(task["n_modes"])))
+        problem = UpdatingProblem(model, damage.measurements(task, spec["seed"])[state])
+        ratios = e["updated_ratio"].to_numpy(float)
+        if ratios.size != len(problem.parameters):
+            continue
+        out.append((f"beam_{state}", problem, {"initial": np.ones(ratios.size), "updated": ratios}))
+    return out
+
+
 def write_shape_tables(out: Path, tables: dict[str, pd.DataFrame], cfg) -> list[Path]:
     """Write the shape tables of a study into ``out``; returns the files (none on failure)."""
     if cfg.kind not in KINDS:
@@ -85,9 +127,13 @@ def write_shape_tables(out: Path, tables: dict[str, pd.DataFrame], cfg) -> list[
 
     try:
         parts: dict[str, list[pd.DataFrame]] = {name: [] for name in TABLES}
-        for task, states in shape_states(cfg, tables):
-            model = task["structure"]["name"]
-            shapes = shape_tables(build_problem(task), states, structure=model)
+        if cfg.kind == "damage":
+            found = damage_problems(cfg, tables)
+        else:
+            found = [(task["structure"]["name"], build_problem(task), states)
+                     for task, states in shape_states(cfg, tables)]
+        for model, problem, states in found:
+            shapes = shape_tables(problem, states, structure=model)
             for name in TABLES:
                 parts[name].append(shapes[name].assign(model=model) if not shapes[name].empty else shapes[name])
         if not parts["mac_matrix"]:
