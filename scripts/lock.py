@@ -57,7 +57,10 @@ def main(argv: list[str]) -> None:
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     extras = argv or sorted(project.get("optional-dependencies", {}))
     pins = closure(project, extras)
-    lines = [f"# gomu[{','.join(extras)}] on Python {sys.version.split()[0]}, written by scripts/lock.py",
+    import platform
+
+    lines = [f"# gomu[{','.join(extras)}] on Python {sys.version.split()[0]} ({platform.system()} "
+             f"{platform.machine()}), written by scripts/lock.py",
              "# installed by scripts/_setup.sh before the project itself (pip install -r requirements.lock)"]
     lines += [f"{name}=={version}" for name, version in sorted(pins.items())]
     (ROOT / "requirements.lock").write_text("\n".join(lines) + "\n")
