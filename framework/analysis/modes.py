@@ -118,7 +118,8 @@ def plot_errors(modes: pd.DataFrame, path: Path, pairing: str) -> bool:
         return False
     points = list(dict.fromkeys(df["label"]))
     colors = {v: f"C{i}" for i, v in enumerate(dict.fromkeys(df["variant"]))}
-    fig, axes = plt.subplots(1, len(points), figsize=(5 * len(points), 4), sharey=True, squeeze=False)
+    width = max(5.0, 0.95 * df["mode"].nunique() + 1.5)
+    fig, axes = plt.subplots(1, len(points), figsize=(width * len(points) + 2, 4.4), sharey=True, squeeze=False)
     for ax, point in zip(axes[0], points):
         for variant, g in df[df["label"] == point].groupby("variant", sort=False):
             matched = g["matched"].astype(bool).to_numpy()
@@ -130,7 +131,11 @@ def plot_errors(modes: pd.DataFrame, path: Path, pairing: str) -> bool:
         ticks = mode_ticks(df)
         ax.set_xticks(list(ticks), list(ticks.values()), fontsize=7)
         ax.set(title=f"{point} parameters", xlabel="measured mode")
-        ax.legend(fontsize=7)
+    handles = {}
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(lab, h)
+    fig.legend(list(handles.values()), list(handles), fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 0.95))
     axes[0][0].set_ylabel(f"(f_model - f_measured) / f_measured [%], pairing: {pairing}")
     fig.tight_layout()
     save_figure(fig, path, dpi=120)
