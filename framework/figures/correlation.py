@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -20,8 +21,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from framework.io import save_figure  # noqa: E402
-
 #: resolution of the shape and correlation figures (3-D panels with many lines make big files)
 SHAPE_DPI = 100
 
@@ -29,8 +28,12 @@ MAX_MODES = 20
 
 
 def _tick(label: str, f: float) -> str:
-    return f"{label}\n{f:.2f} Hz" if not str(label).startswith(("mode ", "model ")) else f"{label.split(' (')[0]}" \
-        f" {f:.2f} Hz" + (f"\n({label.split(' (', 1)[1]}" if " (" in str(label) else "")
+    """'1st vertical\n1.64 Hz' for a measured mode, 'model 3 2.80 Hz\n(vertical)' for a model mode."""
+    label = str(label)
+    if not label.startswith(("mode ", "model ")):
+        return f"{textwrap.fill(label, 16)}\n{f:.2f} Hz"
+    head, _, kind = label.partition(" (")
+    return f"{head} {f:.2f} Hz" + (f"\n({kind}" if kind else "")
 
 
 def _heatmap(ax, df: pd.DataFrame, title: str, xlabel: str, ylabel: str):
@@ -65,11 +68,11 @@ def mac_figure(mac: pd.DataFrame, path: Path) -> Path | None:
         return None
     width = [max(4.0, 0.45 * d["j"].clip(upper=MAX_MODES).max() + 2.5) for *_, d in panels]
     fig, axes = plt.subplots(1, len(panels), figsize=(sum(width), 4.8), squeeze=False,
-                             gridspec_kw={"width_ratios": width})
+                             gridspec_kw={"width_ratios": width, "wspace": 0.45})
     for ax, (title, xl, yl, d) in zip(axes.ravel(), panels):
         im = _heatmap(ax, d, title, xl, yl)
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="MAC")
-    return save_figure(fig, path, dpi=SHAPE_DPI)
+    return _save(fig, path)
 
 
 def auto_mac_model_figure(mac: pd.DataFrame, path: Path) -> Path | None:
@@ -83,7 +86,7 @@ def auto_mac_model_figure(mac: pd.DataFrame, path: Path) -> Path | None:
         im = _heatmap(ax, auto[auto["state"] == state], f"auto-MAC of the model modes\nat the sensors ({state})",
                       "model mode", "model mode")
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="MAC")
-    return save_figure(fig, path, dpi=SHAPE_DPI)
+    return _save(fig, path)
 
 
 def comac_figure(comac: pd.DataFrame, geometry: pd.DataFrame | None, path: Path) -> Path | None:
@@ -126,4 +129,10 @@ def comac_figure(comac: pd.DataFrame, geometry: pd.DataFrame | None, path: Path)
         fig.colorbar(sc, ax=gax, shrink=0.7, label=f"COMAC ({state}; lowest DOF at each sensor)")
         gax.set_title(f"COMAC at the sensors ({state} parameters)", fontsize=9)
         _frame(gax, geo)
-    return save_figure(fig, path, dpi=SHAPE_DPI)
+    return _save(fig, path)
+
+
+def _save(fig, path: Path) -> Path:
+    from framework.figures import save_compact
+
+    return save_compact(fig, path, dpi=SHAPE_DPI)

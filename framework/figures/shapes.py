@@ -25,8 +25,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from framework.io import save_figure  # noqa: E402
-
 #: resolution of the shape and correlation figures (3-D panels with many lines make big files)
 SHAPE_DPI = 100
 
@@ -158,7 +156,7 @@ def model_modes_figure(geometry: pd.DataFrame, mode_shapes: pd.DataFrame, path: 
         fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8, frameon=False)
     fig.suptitle(f"Model mode shapes ({state} parameters); grey: undeformed; largest translation drawn as "
                  f"{geo.fraction:.0%} of the structure's size", fontsize=10, y=1.02)
-    return save_figure(fig, path, dpi=SHAPE_DPI)
+    return _save(fig, path)
 
 
 def paired_figure(geometry: pd.DataFrame | None, mode_shapes: pd.DataFrame, sensors: pd.DataFrame, path: Path,
@@ -206,7 +204,7 @@ def paired_figure(geometry: pd.DataFrame | None, mode_shapes: pd.DataFrame, sens
     fig.suptitle(f"Measured shapes at the sensors over the paired model modes ({state} parameters); "
                  f"largest model translation drawn as {geo.fraction:.0%} of the structure's size",
                  fontsize=10, y=1.02)
-    return save_figure(fig, path, dpi=SHAPE_DPI)
+    return _save(fig, path)
 
 
 def _paired_channels(s: pd.DataFrame, measured: list, path: Path, state: str) -> Path:
@@ -231,4 +229,10 @@ def _paired_channels(s: pd.DataFrame, measured: list, path: Path, state: str) ->
     fig.suptitle(f"Measured and paired model shapes by channel ({state} parameters; the data hold no "
                  "coordinates)", fontsize=10)
     fig.tight_layout()
-    return save_figure(fig, path, dpi=SHAPE_DPI)
+    return _save(fig, path)
+
+
+def _save(fig, path: Path) -> Path:
+    from framework.figures import save_compact
+
+    return save_compact(fig, path, dpi=SHAPE_DPI)

@@ -56,10 +56,10 @@ def shape_tables(problem, states: dict[str, np.ndarray], structure: str = "") ->
         out["mac_matrix"] += _matrix_rows("auto_measured", "measured", e, e, labels, labels,
                                           measured.frequencies_hz, measured.frequencies_hz)
     tables = {name: pd.DataFrame(rows) for name, rows in out.items()}
-    for name in ("mode_shapes", "sensor_shapes"):  # shapes scaled to 1: 6 decimals are plenty for figures
+    for name in ("mode_shapes", "sensor_shapes"):  # shapes scaled to 1: 5 decimals are plenty for figures
         df = tables[name]
         cols = [c for c in df.columns if c in ("ux", "uy", "uz") or c.startswith(("measured_u", "model_u"))]
-        tables[name][cols] = df[cols].round(6) if cols else df[cols]
+        tables[name][cols] = df[cols].round(5) if cols else df[cols]
     return tables
 
 
