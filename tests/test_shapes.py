@@ -39,7 +39,7 @@ def test_lab_frame_tables_pair_measured_with_model_and_move_the_slab_rigidly():
     # the slab is rigid: the four corners' x displacement differs only through the torsion
     modes = t["mode_shapes"]
     slab = modes[(modes["node"] > 4) & (modes["mode"] == 1)]
-    assert np.nanmax(np.hypot(modes["ux"], modes["uy"])) == pytest.approx(1.0)
+    assert np.nanmax(np.hypot(modes["ux"], modes["uy"])) == pytest.approx(1.0, abs=1e-5)  # 5 decimals
     assert slab["uz"].abs().max() == 0.0
     comac = t["comac"]
     assert set(comac["dof"]) == {"y", "x", "torsion"} and comac["comac"].between(0.9, 1.0).all()
