@@ -95,7 +95,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--workers", type=_positive_int, default=None)
     r.add_argument("--scheduler", default=None, help="Dask scheduler address (implies --backend dask)")
     r.add_argument("--dask", action="store_true", help="start an embedded local Dask cluster")
-    r.add_argument("--no-figures", action="store_true")
+    r.add_argument("--no-figures", action="store_true", help="no figures and no mode-shape tables")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(fn=_cmd_run)
 

@@ -88,11 +88,11 @@ def test_study_writes_shape_tables_on_resume_and_report_needs_no_model(tmp_path,
                     "measured": {"builtin": "lab_frame"}, "budget": {"max_evaluations": 300},
                     "algorithms": {"sm": {"algorithm": "sm", "settings": {"start": "initial"}}},
                     "runs": 1, "output": str(tmp_path / "lab")})
-    run_study(cfg, progress=False, figures=False)
+    run_study(cfg, progress=False, figures=False, shapes=True)
     out = tmp_path / "lab"
     for name in ("geometry", "mode_shapes", "sensor_shapes", "mac_matrix", "comac"):
         (out / f"{name}.csv").unlink()
-    run_study(cfg, resume=True, progress=False, figures=False)  # nothing left to run
+    run_study(cfg, resume=True, progress=False, figures=False, shapes=True)  # nothing left to run
     assert (out / "mac_matrix.csv").exists()
     states = set(pd.read_csv(out / "mode_shapes.csv")["state"])
     assert states == {"initial", "updated"}

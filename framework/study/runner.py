@@ -48,12 +48,14 @@ def run_study(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool | None = None,
+    shapes: bool | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Execute every planned run not yet stored and return the consolidated tables.
 
     Without ``resume`` the study's stored runs are discarded first. With it, stored runs
     (identified by their run id) are kept and skipped. A folder holding another study's
-    results is refused, never overwritten.
+    results is refused, never overwritten. ``shapes`` (default: as ``figures``) writes the
+    mode-shape tables of :mod:`framework.shapes.stage` (it builds the model again).
     """
     kind = get_kind(cfg.kind)
     out = cfg.output_dir(root)
@@ -86,7 +88,8 @@ def run_study(
     finally:
         bar.close()
     tables = store.consolidate(wanted, kind.TABLES)
-    write_shape_tables(out, tables, cfg)  # mode shapes and MAC of the initial and best model
+    if (figures if shapes is None else shapes):
+        write_shape_tables(out, tables, cfg)  # mode shapes and MAC of the initial and best model
     derive(out, tables, cfg, figures=figures)
     return tables
 
