@@ -7,7 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.figures import draw_problem_shapes, shape_figures
+from framework.figures import draw_problem_shapes
+from framework.figures.shapes import paired_figure
 from framework.measurements import MeasuredModes
 from framework.models.lab_frame import make_model, measured
 from framework.problem import UpdatingProblem
@@ -126,8 +127,9 @@ def test_model_without_geometry_is_drawn_by_channel(tmp_path):
     model = Chain()
     r = model.modal({})
     data = MeasuredModes(r.frequencies_hz, ("a", "b", "c"), r.shapes)
-    files = draw_problem_shapes(UpdatingProblem(model, data), {"initial": model.parameters.initial}, tmp_path)
-    assert (tmp_path / "shapes_paired_initial.png") in files
-    assert set(pd.read_csv(tmp_path / "sensor_shapes.csv")["layout"]) == {"channels"}
-    assert pd.read_csv(tmp_path / "geometry.csv").empty if (tmp_path / "geometry.csv").stat().st_size > 1 else True
-    assert shape_figures(tmp_path)
+    t = shape_tables(UpdatingProblem(model, data), {"initial": model.parameters.initial})
+    assert t["geometry"].empty and t["mode_shapes"].empty
+    assert set(t["sensor_shapes"]["layout"]) == {"channels"}
+    np.testing.assert_allclose(t["sensor_shapes"]["measured_ux"], t["sensor_shapes"]["model_ux"], atol=1e-5)
+    path = paired_figure(None, t["mode_shapes"], t["sensor_shapes"], tmp_path / "p.png", "initial")
+    assert path.stat().st_size > 5000
