@@ -43,7 +43,11 @@ def _cmd_run(args) -> int:
 def _cmd_report(args) -> int:
     from framework.study.runner import report
 
-    files = report(Path(args.results_dir))
+    files = report(Path(args.results_dir), shapes=args.shapes)
+    if args.html:
+        from framework.figures.interactive import all_html
+
+        files += all_html(Path(args.results_dir))
     for f in files:
         sys.stdout.write(f"{f}\n")
     return 0
@@ -110,12 +114,16 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--workers", type=_positive_int, default=None)
     r.add_argument("--scheduler", default=None, help="Dask scheduler address (implies --backend dask)")
     r.add_argument("--dask", action="store_true", help="start an embedded local Dask cluster")
-    r.add_argument("--no-figures", action="store_true")
+    r.add_argument("--no-figures", action="store_true", help="no figures and no mode-shape tables")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.set_defaults(fn=_cmd_run)
 
     rep = sub.add_parser("report", help="regenerate all figures from a results folder's tables")
     rep.add_argument("results_dir")
+    rep.add_argument("--shapes", action="store_true",
+                     help="(re)compute the mode-shape tables first (builds the model; for folders of earlier versions)")
+    rep.add_argument("--html", action="store_true",
+                     help="also write interactive 3-D mode shapes (shapes_<state>.html; needs the viz extra, plotly)")
     rep.set_defaults(fn=_cmd_report)
 
     v = sub.add_parser("validate", help="check a config and its data without running anything")

@@ -3,7 +3,8 @@
 ``provenance()`` returns a plain dict (JSON-able): the project's version and git commit (with
 a flag for uncommitted changes), Python and platform, the versions of the numerical packages
 the results depend on, and the command line. The study runner writes it to
-``<results>/provenance.json`` next to the tables.
+``<results>/provenance.json`` next to the tables; ``gomu report`` writes one, marked as its
+own, into a folder that has none (results of an earlier version).
 """
 
 from __future__ import annotations
@@ -53,7 +54,13 @@ def provenance() -> dict:
     }
 
 
-def write_provenance(folder: str | Path) -> Path:
+def write_provenance(folder: str | Path, by: str = "run") -> Path:
+    """Write ``provenance.json``. ``by="report"`` (``gomu report`` of a folder without one)
+    says so: it records the code that redrew the figures, not the one that ran the runs."""
     path = Path(folder) / "provenance.json"
-    atomic_write_text(path, json.dumps(provenance(), indent=2, sort_keys=True) + "\n")
+    record = provenance()
+    if by == "report":
+        record["written_by"] = ("gomu report: the code that derived the figures and derived tables; the run "
+                                "tables predate this record")
+    atomic_write_text(path, json.dumps(record, indent=2, sort_keys=True) + "\n")
     return path

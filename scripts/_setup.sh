@@ -30,10 +30,16 @@ if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c 'import sys; assert sys.ve
   .venv/bin/python -m pip install -q --upgrade pip
 fi
 
-EXTRAS="${GOMU_EXTRAS:-test,ident,exchange,fast}"
+# requirements.lock pins every package of every extra to the versions the tests passed with
+# (written by scripts/lock.py); GOMU_NO_LOCK=1 installs the newest versions pyproject.toml allows.
+EXTRAS="${GOMU_EXTRAS:-test,ident,exchange,fast,docs,viz}"
 STAMP=".venv/.gomu-installed"
-WANT="$(cat pyproject.toml | sha1sum | cut -c1-16)-$EXTRAS"
+WANT="$(cat pyproject.toml requirements.lock | sha1sum | cut -c1-16)-$EXTRAS-${GOMU_NO_LOCK:-0}"
 if [ ! -f "$STAMP" ] || [ "$(cat "$STAMP")" != "$WANT" ]; then
+  if [ "${GOMU_NO_LOCK:-0}" != 1 ]; then
+    echo "installing the pinned environment (requirements.lock) into .venv"
+    .venv/bin/python -m pip install -q -r requirements.lock
+  fi
   echo "installing gomu[$EXTRAS] into .venv"
   .venv/bin/python -m pip install -q -e ".[$EXTRAS]"
   echo "$WANT" > "$STAMP"

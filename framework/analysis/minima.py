@@ -188,7 +188,8 @@ def plot_objectives(runs: pd.DataFrame, path: Path) -> None:
     fig, ax = plt.subplots(figsize=(7, 4.2))
     sns.boxplot(data=df, x="method", y="objective", order=order, ax=ax, color="0.9", showfliers=False)
     sns.stripplot(data=df, x="method", y="objective", order=order, ax=ax, size=4, alpha=0.7)
-    ax.set(yscale="log", xlabel="", ylabel="final objective", title="Final objective per run")
+    ax.set(yscale="log", xlabel="", ylabel="final objective",
+           title="Final objective, every run a point (box: quartiles; whiskers: 1.5 IQR)")
     ax.tick_params(axis="x", rotation=20)
     _save(fig, path)
 

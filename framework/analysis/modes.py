@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from framework.io import save_figure
+from framework.plots import mode_ticks
 
 MODEL_COLUMNS = ("f_measured_hz", "f_model_hz")
 
@@ -100,7 +101,9 @@ def plot_frequencies(modes: pd.DataFrame, path: Path, pairing: str, point: str, 
         ax.plot(first["mode"], first[ref], "s", mfc="none", label=ref)
     for variant, g in df.groupby("variant", sort=False):
         ax.plot(g["mode"], g["f_model_hz"], "x", ms=8, label=f"model, {variant}")
-    ax.set(xlabel="measured mode", ylabel="frequency (Hz)", xticks=first["mode"].to_numpy(),
+    ticks = mode_ticks(first)
+    ax.set_xticks(list(ticks), list(ticks.values()), fontsize=7)
+    ax.set(xlabel="measured mode", ylabel="frequency (Hz)",
            title=f"Model at the {point} point vs measured (pairing: {pairing})")
     ax.legend(fontsize=7)
     save_figure(fig, path, dpi=120)
@@ -115,7 +118,8 @@ def plot_errors(modes: pd.DataFrame, path: Path, pairing: str) -> bool:
         return False
     points = list(dict.fromkeys(df["label"]))
     colors = {v: f"C{i}" for i, v in enumerate(dict.fromkeys(df["variant"]))}
-    fig, axes = plt.subplots(1, len(points), figsize=(5 * len(points), 4), sharey=True, squeeze=False)
+    width = max(5.0, 0.95 * df["mode"].nunique() + 1.5)
+    fig, axes = plt.subplots(1, len(points), figsize=(width * len(points) + 2, 4.4), sharey=True, squeeze=False)
     for ax, point in zip(axes[0], points):
         for variant, g in df[df["label"] == point].groupby("variant", sort=False):
             matched = g["matched"].astype(bool).to_numpy()
@@ -124,9 +128,15 @@ def plot_errors(modes: pd.DataFrame, path: Path, pairing: str) -> bool:
                 ax.plot(g["mode"][~matched], np.zeros((~matched).sum()), "x", color=colors[variant], ms=11, mew=2,
                         label=f"{variant}: unmatched")
         ax.axhline(0.0, color="k", lw=0.5)
-        ax.set(title=point, xlabel="measured mode", xticks=sorted(df["mode"].unique()))
-        ax.legend(fontsize=7)
-    axes[0][0].set_ylabel(f"frequency error (%), pairing: {pairing}")
+        ticks = mode_ticks(df)
+        ax.set_xticks(list(ticks), list(ticks.values()), fontsize=7)
+        ax.set(title=f"{point} parameters", xlabel="measured mode")
+    handles = {}
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(lab, h)
+    fig.legend(list(handles.values()), list(handles), fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 0.95))
+    axes[0][0].set_ylabel(f"(f_model - f_measured) / f_measured [%], pairing: {pairing}")
     fig.tight_layout()
     save_figure(fig, path, dpi=120)
     return True

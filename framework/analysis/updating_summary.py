@@ -158,7 +158,13 @@ def figures(tables: dict[str, pd.DataFrame], out_dir: Path, error_band_pct: floa
         sns.stripplot(data=base, x="mode", y="error_pct", hue="algorithm", dodge=True, ax=ax)
         for sign in (1, -1):
             ax.axhline(sign * error_band_pct, color="r", lw=0.5, ls="--")
-        ax.set(ylabel="frequency error after updating (%)", title="Updated vs measured frequencies (every run)")
+        from framework.plots import mode_ticks
+
+        ticks = mode_ticks(base)
+        ax.set_xticks(range(len(ticks)), list(ticks.values()), fontsize=7)
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set(xlabel="measured mode", ylabel="(f_model - f_measured) / f_measured [%]",
+               title=f"Updated vs measured frequencies, one point per run (dashed: +-{error_band_pct:g} %)")
         save_figure(fig, out_dir / "updated_errors.png", dpi=120)
         written.append(out_dir / "updated_errors.png")
     return written

@@ -73,10 +73,17 @@ def case_figure(tables: dict[str, pd.DataFrame], path: Path) -> None:
             "round " + c["round"].astype(str) + ": " + c["effect"]
             + c["effect_variant"].fillna("").map(lambda v: f" [{v}]" if v else "")
         )
-        gain = np.sign(c["delta_bic_vs_none"]) * np.log10(1 + np.abs(c["delta_bic_vs_none"]))
-        ax.barh(c["name"], gain, color=np.where(c["named"].astype(bool), "tab:green", "0.6"))
-        ax.axvline(np.log10(11), color="k", ls="--", lw=0.8)
-        ax.set(xlabel="sign * log10(1 + |Delta BIC vs no change|)", title="candidates (green: named; dashed: decisive)")
+        delta = c["delta_bic_vs_none"].to_numpy(dtype=float)
+        # Kass & Raftery's evidence grades: 0-2 barely worth a mention, 2-6 positive, 6-10 strong,
+        # > 10 very strong; the axis is linear within +-10 (where the grades are) and logarithmic beyond
+        for lo, hi, shade in ((2, 6, "0.95"), (6, 10, "0.88"), (10, max(11.0, 1.5 * np.nanmax(np.abs(delta))), "0.8")):
+            ax.axvspan(lo, hi, color=shade, zorder=0)
+        ax.barh(c["name"], delta, color=np.where(c["named"].astype(bool), "tab:green", "0.5"), zorder=2)
+        ax.axvline(10, color="k", ls="--", lw=0.8)
+        ax.axvline(0, color="k", lw=0.5)
+        ax.set_xscale("symlog", linthresh=10, linscale=1.0)
+        ax.set(xlabel="Delta BIC vs no change (> 0: candidate better; linear to 10, log beyond)")
+        ax.set_title("candidates (green: named); bands: positive 2-6, strong 6-10, very strong > 10", fontsize=9)
         ax.tick_params(axis="y", labelsize=7)
     else:
         ax.text(0.5, 0.5, "no candidates ranked", ha="center")

@@ -89,6 +89,10 @@ def plot_stability(
     return save_figure(fig, path, dpi=120, tight=False)
 
 
+#: channels drawn in an FRF figure (the mode indicator shows every channel)
+MAX_FRF_CHANNELS = 4
+
+
 def plot_frf(frf: pd.DataFrame, path: str | Path, peaks: pd.DataFrame | None = None, title: str = "",
              input_label: str = "input") -> Path:
     """|H1| (log), phase and coherence of every channel of an ``frf`` table (one record)."""
@@ -96,7 +100,12 @@ def plot_frf(frf: pd.DataFrame, path: str | Path, peaks: pd.DataFrame | None = N
 
     plt = _pyplot()
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True, gridspec_kw={"height_ratios": [2, 1, 1]})
-    channels = [c for c in dict.fromkeys(frf["channel"]) if c != INDICATOR]
+    stored = [c for c in dict.fromkeys(frf["channel"]) if c != INDICATOR]
+    channels = stored[:MAX_FRF_CHANNELS]  # more overlaid curves are unreadable: the indicator sums them all
+    indicator = frf[frf["channel"] == INDICATOR]
+    if not indicator.empty:  # mode indicator: sum over every output channel of |H1|
+        axes[0].semilogy(indicator["frequency_hz"], indicator["magnitude"], color="0.4", lw=1.6, alpha=0.6,
+                         label="mode indicator: sum of |H1| over all outputs")
     for channel in channels:
         rows = frf[frf["channel"] == channel]
         axes[0].semilogy(rows["frequency_hz"], rows["magnitude"], lw=0.8, label=channel)
@@ -106,14 +115,16 @@ def plot_frf(frf: pd.DataFrame, path: str | Path, peaks: pd.DataFrame | None = N
         for f, accepted in zip(peaks["frequency_hz"], peaks["accepted"]):
             for ax in axes:
                 ax.axvline(f, color="k" if accepted else "0.7", ls="--", lw=0.6)
+        axes[0].plot([], [], color="k", ls="--", lw=0.6, label="picked peak (grey: rejected)")
     axes[0].set_ylabel(f"|H1| (output / {input_label})")
     axes[1].set_ylabel("phase (deg)")
     axes[2].set_ylabel("coherence")
     axes[2].set_ylim(0, 1.05)
     axes[2].set_xlabel("frequency (Hz)")
-    if len(channels) <= 8:
-        axes[0].legend(fontsize=7, ncol=2)
-    axes[0].set_title(title or "H1 FRF")
+    axes[0].legend(fontsize=7, ncol=2)
+    shown = (f"{len(channels)} of {len(stored)} stored channels" if len(stored) > len(channels)
+             else f"{len(channels)} stored channel" + ("s" if len(channels) > 1 else ""))
+    axes[0].set_title((title or "H1 FRF") + f"\n({shown} and the mode indicator)", fontsize=10)
     fig.tight_layout()
     return save_figure(fig, path, dpi=120, tight=False)
 

@@ -2,7 +2,8 @@
 
 plan -> check the inputs (the kind's preflight) -> claim the output folder -> execute the
 runs not stored yet (serial, processes or Dask) -> one atomic part per finished run ->
-consolidate the tables -> analyses (table -> table) -> figures (from the tables).
+consolidate the tables -> mode-shape tables (:mod:`framework.shapes.stage`) -> analyses
+(table -> table) -> figures (from the tables).
 ``report(results_dir)`` redoes the last two from the stored tables and config alone.
 """
 
@@ -16,8 +17,10 @@ import pandas as pd
 import yaml
 
 from framework.errors import InputError
+from framework.figures import shape_figures
 from framework.parallel import dask_client, map_unordered
 from framework.provenance import write_provenance
+from framework.shapes.stage import write_shape_tables
 from framework.study.execute import error_tables, execute_run
 from framework.study.kinds import get_kind
 from framework.study.plan import plan
@@ -57,12 +60,14 @@ def run_study(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool | None = None,
+    shapes: bool | None = None,
 ) -> dict[str, pd.DataFrame]:
     """Execute every planned run not yet stored and return the consolidated tables.
 
     Without ``resume`` the study's stored runs are discarded first. With it, stored runs
     (identified by their run id) are kept and skipped. A folder holding another study's
-    results is refused, never overwritten.
+    results is refused, never overwritten. ``shapes`` (default: as ``figures``) writes the
+    mode-shape tables of :mod:`framework.shapes.stage` (it builds the model again).
     """
     kind = get_kind(cfg.kind)
     out = cfg.output_dir(root)
@@ -107,6 +112,8 @@ def run_study(
         if client is not None:
             client.close()
     tables = store.consolidate(wanted, kind.TABLES)
+    if (figures if shapes is None else shapes):
+        write_shape_tables(out, tables, cfg)  # mode shapes and MAC of the initial and best model
     derive(out, tables, cfg, figures=figures)
     return tables
 
@@ -141,11 +148,14 @@ def derive(out: Path, tables: dict[str, pd.DataFrame], cfg: StudyHeader, figures
             written += list(draw(tables, out, cfg.report))
         except Exception as exc:
             log.warning("figures of %s failed: %s", out, exc)
+    if figures:
+        written += shape_figures(out)
     return written
 
 
-def report(results_dir: str | Path) -> list[Path]:
-    """Redo the analyses and figures of a results folder from its tables and config.yaml."""
+def report(results_dir: str | Path, shapes: bool = False) -> list[Path]:
+    """Redo the analyses and figures of a results folder from its tables and config.yaml;
+    ``shapes``: first (re)write the mode-shape tables (builds the model)."""
     from framework.study.config import validate
 
     root = Path(results_dir)
@@ -164,6 +174,10 @@ def report(results_dir: str | Path) -> list[Path]:
     tables = read_tables(root, kind.TABLES)
     if not tables or all(df.empty for df in tables.values()):
         raise InputError(f"{root}: no result tables to report on")
+    if not (root / "provenance.json").exists():
+        write_provenance(root, by="report")
+    if shapes:
+        write_shape_tables(root, tables, cfg)
     return derive(root, tables, cfg)
 
 
