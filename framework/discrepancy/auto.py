@@ -491,7 +491,10 @@ def with_auto(catalogue: Catalogue, hidden: Mapping[str, tuple] | None = None,
     if not isinstance(base, OpenSeesModel):
         raise InputError(f"{catalogue.structure}: candidates: auto needs an OpenSees model (OpenSeesModel), "
                          f"the factory returned {type(base).__name__}")  # fmt: skip
-    top = inspect_model(base, vertical_axis)
+    try:
+        top = inspect_model(base, vertical_axis)
+    except ModelEvaluationError as exc:  # the user's build raised: one line naming it
+        raise InputError(f"structure {catalogue.structure!r}: building the model failed: {exc}") from None
     generated = auto_effects(top)
     clash = sorted(set(generated) & set(catalogue.effects))
     if clash:
