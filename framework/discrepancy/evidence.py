@@ -9,7 +9,8 @@ the parameters, at the calibrated optimum theta*:
 
 with H = J' J the Gauss-Newton Hessian of -ln L (J = dr/dtheta in physical units, central
 differences at 1e-3 of each parameter's span, one-sided at a bound) and V the number of
-variants searched (a uniform prior over the locations). 2 (ln Z_1 - ln Z_0) is on the
+variants searched (a uniform prior over the locations); a parameter on which the residuals
+do not depend (a zero Jacobian column) integrates its prior to 1 and is left out. 2 (ln Z_1 - ln Z_0) is on the
 scale of -Delta BIC; an effect is decisive by the evidence when it beats no change and the
 runner-up by ``DECISIVE_2LNB`` = 10 (2 ln Bayes factor, Kass & Raftery: very strong).
 The approximation assumes an interior, Gaussian-shaped optimum: a parameter at its bound
@@ -53,6 +54,11 @@ def fd_jacobian(problem: UpdatingProblem, x: np.ndarray, step: float = FD_STEP) 
 def laplace_log_evidence(chi2: float, jac_x: np.ndarray, spans: np.ndarray, n_variants: int = 1) -> float:
     """ln Z of the module docstring from chi2_min and J in normalized x (J_theta = J_x / span)."""
     spans = np.asarray(spans, float)
+    norms = np.linalg.norm(jac_x, axis=0) if jac_x.size else np.zeros(0)
+    keep = norms > 1e-8 * max(float(norms.max(initial=0.0)), 1e-300)
+    # a parameter the residuals do not depend on: the likelihood is flat over its prior range,
+    # whose integral cancels its prior density (it contributes 0 to ln Z)
+    spans, jac_x = spans[keep], jac_x[:, keep]
     k = spans.size
     log_prior = -float(np.sum(np.log(spans))) - math.log(max(n_variants, 1))
     if k == 0:
