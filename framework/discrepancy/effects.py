@@ -143,6 +143,10 @@ def get_catalogue(name: str, **options) -> Catalogue:
     module, attr = path.split(":", 1)
     try:
         fn = getattr(importlib.import_module(module), attr)
+    except ModuleNotFoundError as exc:
+        raise InputError(f"structure {name!r}: cannot import catalogue {path!r}: {exc} (gomu imports modules "
+                         "from the current folder and PYTHONPATH: run gomu in the folder that holds the module)"
+                         ) from None  # fmt: skip
     except (ImportError, AttributeError) as exc:
         raise InputError(f"structure {name!r}: cannot import catalogue {path!r}: {exc}") from exc
     except Exception as exc:  # a user's module can raise anything while imported

@@ -168,21 +168,43 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
         "measured": cfg.measured.model_dump(mode="json"),
         "candidates": cfg.candidates,
     }
-    try:
-        catalogue = catalogue_of(task)
-        # the catalogue's recommended settings, overridden by those the config gives
-        settings = DiagnoseSettings(**(dict(catalogue.settings) | cfg.settings.model_dump(exclude_unset=True)))
-        relevant = list(sweep_values)
-        gen = task["measured"]["generate"]
-        if gen is not None and not _magnitude_matters(catalogue, gen):
-            gen["magnitude"] = 1.0
-            relevant = [k for k in relevant if k != "measured.generate.magnitude"]
-    except InputError as exc:
-        raise InputError(f"study {cfg.study!r}: {exc}") from None
-    task["settings"] = settings.model_dump(mode="json")
+    relevant = list(sweep_values)
+    explicit = cfg.settings.model_dump(exclude_unset=True)
+    if not _trusted(cfg.structure):
+        # a user's module is imported only when runs (or validate --build) need it: its
+        # recommended settings are merged then, and every magnitude is planned
+        task["settings"] = None
+        task["explicit_settings"] = cfg.settings.model_dump(mode="json", exclude_unset=True)
+    else:
+        try:
+            catalogue = catalogue_of(task)
+            # the catalogue's recommended settings, overridden by those the config gives
+            settings = DiagnoseSettings(**(dict(catalogue.settings) | explicit))
+            gen = task["measured"]["generate"]
+            if gen is not None and not _magnitude_matters(catalogue, gen):
+                gen["magnitude"] = 1.0
+                relevant = [k for k in relevant if k != "measured.generate.magnitude"]
+        except InputError as exc:
+            raise InputError(f"study {cfg.study!r}: {exc}") from None
+        task["settings"] = settings.model_dump(mode="json")
     columns = run_columns(task)
     return [{"label": cfg.structure, "seed": cfg.seed + i, "task": task, "columns": columns, "relevant": relevant}
             for i in range(cfg.runs)]  # fmt: skip
+
+
+def _trusted(structure: str) -> bool:
+    """A built-in catalogue or one in the framework's own modules (planned by importing it)."""
+    from framework.discrepancy.effects import CATALOGUES
+
+    return structure in CATALOGUES or structure.startswith("framework.")
+
+
+def settings_of(task: dict, catalogue: Catalogue) -> dict:
+    """The run's resolved workflow settings (a user's catalogue: its recommendation + the config's)."""
+    if task.get("settings") is not None:
+        return task["settings"]
+    explicit = task.get("explicit_settings") or {}
+    return DiagnoseSettings(**(dict(catalogue.settings) | explicit)).model_dump(mode="json")
 
 
 def _magnitude_matters(catalogue: Catalogue, gen: dict) -> bool:
@@ -228,8 +250,8 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
         key = json.dumps({k: task[k] for k in ("structure", "structure_options", "start_effects", "measured",
                                                "candidates")},
                          sort_keys=True)  # fmt: skip
-        if key in seen:
-            continue
+        if key in seen or not (build_references or _trusted(task["structure"])):
+            continue  # a user's module is imported only with build_references (gomu validate --build, runs)
         seen.add(key)
         try:
             _check_task(task)
@@ -244,6 +266,7 @@ def _check_task(task: dict) -> None:
     from framework.problem import UpdatingProblem
 
     catalogue = catalogue_of(task)
+    settings_of(task, catalogue)
     start = catalogue.check_active(task["start_effects"])
     gen = task["measured"]["generate"]
     if gen is not None:
@@ -267,6 +290,7 @@ def run(spec: dict) -> dict[str, list[dict]]:
     catalogue = catalogue_of(task)
     try:
         measured = measured_of(task["measured"], catalogue, spec["seed"])
+        task = {**task, "settings": settings_of(task, catalogue)}
         diagnosis = diagnose(catalogue, measured, DiagnoseSettings(**task["settings"]), start=task["start_effects"])
     except (ModelEvaluationError, InputError) as exc:
         log.warning("diagnosis %s seed %s failed: %s", spec["label"], spec["seed"], exc)
@@ -313,7 +337,7 @@ def run_facts(task: dict, seed: int) -> dict[str, Any]:
         facts |= {"builtin": measured["builtin"], "builtin_case": measured["case"]}
     facts["start_effects"] = "+".join(f"{k}[{v}]" if v else k for k, v in task["start_effects"].items())
     facts["structure_options"] = json.dumps(task["structure_options"], sort_keys=True)
-    facts |= {("calibration_seed" if k == "seed" else k): v for k, v in task["settings"].items()}
+    facts |= {("calibration_seed" if k == "seed" else k): v for k, v in (task["settings"] or {}).items()}
     return facts
 
 
