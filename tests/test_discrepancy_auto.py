@@ -177,6 +177,9 @@ def _gomu(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
 def test_user_module_in_a_temporary_folder_through_the_gomu_command(tmp_path):
     for name in ("my_frame.py", "my_modes.yaml", "auto.yaml"):
         shutil.copy(EXAMPLE / name, tmp_path / name)
+    # from another folder: valid, and the user's module is not imported without --build
+    out = _gomu(["validate", str(tmp_path / "auto.yaml")], tmp_path.parent)
+    assert out.returncode == 0 and "code named in the config was not imported" in out.stdout, out.stderr
     out = _gomu(["validate", "auto.yaml", "--build"], tmp_path)
     assert out.returncode == 0 and "OK - kind 'diagnose', 1 runs" in out.stdout, out.stderr
     out = _gomu(["diagnose", "auto.yaml", "--set", "settings.max_evaluations=40"], tmp_path)
