@@ -1,6 +1,6 @@
 """Benchmark: screened variants (``screen_keep``) against calibrating every location, in one run.
 
-Usage: .venv/bin/python benchmarks/bench_diagnosis_screen.py [--seeds 1 2] [--keep 2]
+Usage: .venv/bin/python benchmarks/bench_diagnosis_screen.py [--seeds 1 2] [--keep 2] [--effects ...]
 
 On the three-storey two-bay frame with ``candidates: auto`` (about 80 generated variants),
 diagnoses data with a hidden effect at a random location twice: every variant calibrated
@@ -32,6 +32,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
     ap.add_argument("--keep", type=int, default=2)
+    ap.add_argument("--effects", nargs="+", default=list(CASES), choices=CASES)
     args = ap.parse_args()
     cat = with_candidates(frame_two_bay.catalogue(), "auto")
     n_variants = sum(len(e.variants) for e in cat.candidate_effects().values())
@@ -39,7 +40,7 @@ def main() -> None:
     base = {"n_starts": 1, "max_evaluations": 50, "screen_points": 0, "refine_starts": 1, "max_rounds": 1}
     totals = {"all": 0, "screened": 0}
     same_named = same_best = n_effects = n_cases = 0
-    for effect in CASES:
+    for effect in args.effects:
         for seed in args.seeds:
             data = generate(cat, HiddenCase({effect: None}, seed=seed, noise=NOISE_LEVELS["high"]))
             out = {}
