@@ -14,6 +14,9 @@
 - partial (the verdict): effects were named but the enriched model still fails the noise
   test; full_explanation = N non-empty and not partial.
 
+In an out-of-candidate case (the hidden effect is not a candidate) any named effect is
+"wrong" by these rules; ``targets`` reports such cases apart (they must be partial).
+
 ``rates``: per structure, candidates, hidden effect, magnitude, noise level and whether the
 data carry standard deviations: the number of cases, the mean of each outcome over the
 completed runs, median gaps before/after, unmatched modes summed, median wall time, and the
@@ -137,6 +140,11 @@ def targets(cases: pd.DataFrame) -> pd.DataFrame:
         ("correct effect and location at full magnitude", ">= 0.90", full["variant_correct"], len(full)),
         ("correct effect at full magnitude", "", full["correct"], len(full)),
         ("wrong names (cases with a hidden effect)", "<= 0.02", hidden["wrong"], len(hidden)),
+        ("wrong names, hidden effect among the candidates", "<= 0.02", inside["wrong"], len(inside)),
+        ("named effects in out-of-candidate cases (any name is wrong there)", "", outside["wrong"],
+         len(outside)),
+        ("wrong full explanations (named as full, not hidden)", "",
+         ok["wrong"] & ok["full_explanation"], len(ok)),
         ("wrong names (every case)", "", ok["wrong"], len(ok)),
         ("false discoveries, null cases with stds", "<= 0.05",
          null[null["data_stds"].astype(bool)]["false_discovery"], int(null["data_stds"].astype(bool).sum())),
