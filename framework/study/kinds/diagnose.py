@@ -193,10 +193,9 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
 
 
 def _trusted(structure: str) -> bool:
-    """A built-in catalogue or one in the framework's own modules (planned by importing it)."""
-    from framework.discrepancy.effects import CATALOGUES
-
-    return structure in CATALOGUES or structure.startswith("framework.")
+    """Not a user's ``module:function``: a built-in name (or an unknown one, refused when planned),
+    or a catalogue in the framework's own modules (planned by importing it)."""
+    return ":" not in structure or structure.startswith("framework.")
 
 
 def settings_of(task: dict, catalogue: Catalogue) -> dict:
