@@ -16,8 +16,10 @@ runner-up by ``DECISIVE_2LNB`` = 10 (2 ln Bayes factor, Kass & Raftery: very str
 The approximation assumes an interior, Gaussian-shaped optimum: a parameter at its bound
 (flagged in the tables) makes it approximate.
 
-Written here because the uncertainty branch's ``framework.uncertainty.evidence`` (tag
-``linearized-ready``) did not exist when this was written.
+The Laplace formula itself is :func:`framework.uncertainty.evidence.laplace_log_evidence`
+(issue 18, tag ``linearized-ready``, merged); this module adds the discrepancy workflow's
+use of it: the finite-difference Jacobian at a candidate's fit, the prior over the
+locations and the parameters without influence. A singular H otherwise gives NaN.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import math
 import numpy as np
 
 from framework.problem import UpdatingProblem
+from framework.uncertainty.evidence import laplace_log_evidence as uq_laplace
 
 DECISIVE_2LNB = 10.0
 FD_STEP = 1e-3
@@ -63,9 +66,4 @@ def laplace_log_evidence(chi2: float, jac_x: np.ndarray, spans: np.ndarray, n_va
     log_prior = -float(np.sum(np.log(spans))) - math.log(max(n_variants, 1))
     if k == 0:
         return -0.5 * chi2 + log_prior
-    j_theta = jac_x / spans[None, :]
-    h = j_theta.T @ j_theta
-    sign, logdet = np.linalg.slogdet(h + 1e-12 * np.trace(h) / k * np.eye(k))
-    if sign <= 0:
-        return float("nan")
-    return float(-0.5 * chi2 + log_prior + 0.5 * k * math.log(2 * math.pi) - 0.5 * logdet)
+    return uq_laplace(-0.5 * chi2, log_prior, jac_x.T @ jac_x, spans)
