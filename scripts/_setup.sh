@@ -32,7 +32,7 @@ fi
 
 # requirements.lock pins every package of every extra to the versions the tests passed with
 # (written by scripts/lock.py); GOMU_NO_LOCK=1 installs the newest versions pyproject.toml allows.
-EXTRAS="${GOMU_EXTRAS:-test,ident,exchange,fast,docs,viz}"
+EXTRAS="${GOMU_EXTRAS:-test,ident,exchange,fast,docs,viz,uq}"
 STAMP=".venv/.gomu-installed"
 WANT="$(cat pyproject.toml requirements.lock | sha1sum | cut -c1-16)-$EXTRAS-${GOMU_NO_LOCK:-0}"
 if [ ! -f "$STAMP" ] || [ "$(cat "$STAMP")" != "$WANT" ]; then

@@ -57,7 +57,7 @@ def test_unmatched_mode_costs_at_least_a_pair_at_the_matching_limit():
         _modes([2.0, 6.0], np.array([[1.0, 1.0], [0, 0.01], [0, 0]])), measured, spec
     )
     assert corr.matched.tolist() == [True, False]
-    expected = (0.1 * 5.0 / (0.005 * 5.0)) ** 2 + 0.5 * 1.0 / 0.02**2
+    expected = (0.1 * 5.0 / (0.01 * 5.0)) ** 2 + 0.5 * 1.0 / 0.05**2
     assert r[1] ** 2 == pytest.approx(expected)
     assert likelihood.n_data(measured, spec) == 2 + 2 * 2
 
@@ -65,8 +65,8 @@ def test_unmatched_mode_costs_at_least_a_pair_at_the_matching_limit():
 def test_default_noise_model_and_bad_std():
     m = MeasuredModes(np.array([4.0]), ("a", "b"), np.array([[2.0], [1.0]]))
     w = likelihood.with_noise_model(m)
-    assert w.frequency_std_hz[0] == pytest.approx(0.02)
-    assert np.allclose(w.shape_std, 0.04)
+    assert w.frequency_std_hz[0] == pytest.approx(0.04)  # the stated assumption: 1 % of f
+    assert np.allclose(w.shape_std, 0.10)  # 5 % of the largest component
     with pytest.raises(InputError, match="frequency_std_hz and shape_std must be > 0"):
         likelihood.with_noise_model(m, frequency_std_rel=0.0)
 

@@ -134,7 +134,8 @@ def test_plan_magnitude_once_without_effect_parameters_and_report_keeps_run_ids(
         ("beam__midspan_mass,magnitude=1.0", 1), ("beam__midspan_mass,magnitude=1.0", 2),
         ("beam__none", 1), ("beam__none", 2)]  # fmt: skip
     none = [s for s in specs if s["variant"] == "beam__none"][0]
-    assert none["columns"] == {"structure": "beam", "hidden_effect": "none", "magnitude": 1.0, "noise": "high"}
+    assert none["columns"] == {"structure": "beam", "hidden_effect": "none", "magnitude": 1.0, "noise": "high",
+                               "data_stds": True, "candidates": "catalogue"}
     assert none["task"]["settings"]["holdout_modes"] is True and none["task"]["settings"]["alpha"] == 0.01
     # report and execution options never change a run
     other = plan(validate(dict(data, report={"showcase_seeds": [2]}, execution={"backend": "processes"})))
@@ -149,11 +150,14 @@ def test_catalogue_settings_apply_unless_the_config_sets_them():
     assert plan(validate(data))[0]["task"]["settings"]["frequency_window"] == 0.3
 
 
-def test_study_config_holds_the_468_cases_of_the_committed_study():
+def test_study_config_holds_the_cases_of_the_committed_study():
     specs = plan(load(ROOT / "studies" / "discrepancy.yaml"))
-    assert len(specs) == 468
+    assert len(specs) == 240
     by_structure = pd.Series([s["columns"]["structure"] for s in specs]).value_counts().to_dict()
-    assert by_structure == {"beam": 210, "lab_frame": 210, "bridge": 48}
+    assert by_structure == {"beam": 108, "lab_frame": 42, "bridge": 12, "framework.models.frame_two_bay:catalogue": 78}
+    kinds = pd.Series([(s["columns"]["hidden_effect"], s["columns"]["data_stds"]) for s in specs
+                       if s["columns"]["structure"] != "bridge"]).value_counts()  # fmt: skip
+    assert kinds[("none", False)] == kinds[("none", True)] == 24  # null cases with and without stds
     bridge = next(s for s in specs if s["columns"]["structure"] == "bridge")["task"]["settings"]
     assert {k: bridge[k] for k in ("n_starts", "max_evaluations", "max_rounds", "frequency_window")} == {
         "n_starts": 1, "max_evaluations": 60, "max_rounds": 2, "frequency_window": 0.15}
@@ -259,7 +263,7 @@ def test_outcome_rules():
     both = "semi_rigid_joints+sensor_mass_eccentricity"
     assert score(both, "sensor_mass_eccentricity+semi_rigid_joints")["correct"]  # order does not matter
     assert score(both, "semi_rigid_joints") == {"correct": False, "variant_correct": False, "wrong": False,
-                                                "partial": True, "missed": False, "false_discovery": False}
+                                                "subset_named": True, "missed": False, "false_discovery": False}
     assert score("midspan_mass", "support_rotational_restraint")["wrong"]
     assert score("midspan_mass", "none")["missed"] and score("none", "midspan_mass")["false_discovery"]
     assert not any(score("none", "none").values())

@@ -55,6 +55,8 @@ class GenerateConfig(Strict):
     noise: NoiseSpec = "low"
     magnitude: float = Field(1.0, gt=0, le=10)
     parameter_error_rel: float = Field(0.05, ge=0, le=1)
+    #: false: the data carry no standard deviations (the diagnosis must assume or estimate them)
+    stds: bool = True
 
 
 class MeasuredSource(Strict):
@@ -101,6 +103,7 @@ def hidden_case(generate_cfg: dict, seed: int) -> HiddenCase:
         noise=noise_of(g),
         parameter_error_rel=float(g.get("parameter_error_rel", 0.05)),
         magnitude=float(g.get("magnitude", 1.0)),
+        with_stds=bool(g.get("stds", True)),
     )
 
 

@@ -43,6 +43,9 @@ class Effect:
     variants: tuple[str, ...] = ("",)
     hidden_values: Mapping[str, tuple[float, float]] = field(default_factory=dict)
     hidden_variants: tuple[str, ...] | None = None
+    #: {parameter: +1 or -1}: the sign of (value - null) that the effect's physics implies;
+    #: a fit of the other sign is flagged (parameters whose bounds allow both signs)
+    expected_sign: Mapping[str, int] = field(default_factory=dict)
 
     @property
     def n_parameters(self) -> int:
@@ -75,6 +78,16 @@ class Catalogue:
     mode_labels: tuple[str, ...] = ()
     settings: Mapping[str, object] = field(default_factory=dict)
     label_modes: Callable[[ModalResult, np.ndarray], tuple[str, ...]] | None = None
+    #: the effects a diagnosis tries (None: every effect); the others still build (hidden data)
+    candidates: tuple[str, ...] | None = None
+    #: names of the effects generated from the model (:mod:`framework.discrepancy.auto`)
+    generated: tuple[str, ...] = ()
+
+    def candidate_effects(self) -> dict[str, Effect]:
+        """The effects a diagnosis tries, in catalogue order."""
+        if self.candidates is None:
+            return dict(self.effects)
+        return {k: v for k, v in self.effects.items() if k in self.candidates}
 
     def effect(self, name: str) -> Effect:
         if name not in self.effects:
@@ -130,6 +143,7 @@ def get_catalogue(name: str, **options) -> Catalogue:
     if name in CATALOGUES:
         module, attr = path.split(":", 1)
         fn = getattr(importlib.import_module(module), attr)
+<<<<<<< HEAD
     else:  # user code: the registry's trust rules (a function defined in a user module)
         from framework.models.registry import resolve
 
@@ -145,3 +159,40 @@ def get_catalogue(name: str, **options) -> Catalogue:
     if not isinstance(catalogue, Catalogue):
         raise InputError(f"structure {name!r}: {path!r} returned {type(catalogue).__name__}, not a Catalogue")
     return catalogue
+=======
+    except ModuleNotFoundError as exc:
+        raise InputError(f"structure {name!r}: cannot import catalogue {path!r}: {exc} (gomu imports modules "
+                         "from the current folder and PYTHONPATH: run gomu in the folder that holds the module)"
+                         ) from None  # fmt: skip
+    except (ImportError, AttributeError) as exc:
+        raise InputError(f"structure {name!r}: cannot import catalogue {path!r}: {exc}") from exc
+    except Exception as exc:  # a user's module can raise anything while imported
+        raise InputError(f"structure {name!r}: importing {module!r} failed: {type(exc).__name__}: {exc}") from None
+    try:
+        out = fn(**options)
+    except InputError:
+        raise
+    except TypeError as exc:
+        raise InputError(f"structure {name!r}: bad catalogue options {sorted(options)}: {exc}") from exc
+    except Exception as exc:  # a user's build can raise anything: one line naming module and error
+        raise InputError(f"structure {name!r}: {path} failed: {type(exc).__name__}: {exc}") from None
+    if isinstance(out, Catalogue):
+        return out
+    from framework.models.opensees import OpenSeesModel
+
+    if isinstance(out, OpenSeesModel):  # a model without hand-written effects (candidates: auto)
+        return catalogue_of_model(out, structure=name)
+    raise InputError(f"structure {name!r}: {path} returned {type(out).__name__}, not a Catalogue or OpenSeesModel")
+
+
+def catalogue_of_model(model, structure: str = "user_model", n_measured_modes: int | None = None) -> Catalogue:
+    """A catalogue without hand-written effects whose model under test is ``model``."""
+
+    def factory(active, **_):
+        if active:
+            raise InputError(f"{structure}: no hand-written effects; unknown {sorted(active)}")
+        return model
+
+    return Catalogue(structure, model.parameters, {}, factory, n_measured_modes or model.n_modes,
+                     description=f"{model.name}")  # fmt: skip
+>>>>>>> diag17

@@ -13,7 +13,8 @@ From one ``np.random.default_rng(seed)``, in this order:
    component of 1, then phi_e = phi + shape_std_rel N(0, 1) per component.
 
 The returned :class:`MeasuredModes` carries ``frequency_std_hz = frequency_std_rel f``
-and ``shape_std = shape_std_rel`` (the noise actually used), and the truth in ``meta``.
+and ``shape_std = shape_std_rel`` (the noise actually used; none with ``with_stds=False``),
+and the truth in ``meta``.
 """
 
 from __future__ import annotations
@@ -64,6 +65,8 @@ class HiddenCase:
     noise: Noise = field(default_factory=Noise)
     parameter_error_rel: float = 0.05
     magnitude: float = 1.0
+    #: False: the returned data carry no standard deviations (as many measured-modes files)
+    with_stds: bool = True
 
 
 def generate(catalogue: Catalogue, case: HiddenCase, name: str = "") -> MeasuredModes:
@@ -108,8 +111,8 @@ def generate(catalogue: Catalogue, case: HiddenCase, name: str = "") -> Measured
         dofs=result.dofs,
         shapes=phi_e,
         labels=_labels(catalogue, result, idx),
-        frequency_std_hz=noise.frequency_std_rel * f_e,
-        shape_std=np.full(phi.shape, noise.shape_std_rel),
+        frequency_std_hz=noise.frequency_std_rel * f_e if case.with_stds else None,
+        shape_std=np.full(phi.shape, noise.shape_std_rel) if case.with_stds else None,
         name=name or f"{catalogue.structure}_{hidden_txt}_seed{case.seed}",
         source=f"generated: {catalogue.structure}, hidden {hidden_txt}, seed {case.seed}",
         meta={

@@ -42,11 +42,12 @@ from framework.measurements import MeasuredModes
 from framework.models.base import ModalResult
 from framework.objectives import Formulation, ObjectiveSpec, correlate
 
-#: sigma_f / f when the data give no frequency_std_hz (0.5 %: typical scatter of
-#: identified frequencies between repeated tests of civil structures)
-DEFAULT_FREQUENCY_STD_REL = 0.005
-#: shape std as a fraction of the mode's largest measured component when no shape_std
-DEFAULT_SHAPE_STD_REL = 0.02
+#: sigma_f / f assumed when the data give no frequency_std_hz (1 %: the upper end of the
+#: scatter of identified frequencies between repeated tests of civil structures; a
+#: conservative assumption, stated in every summary, see workflow.noise_warning)
+DEFAULT_FREQUENCY_STD_REL = 0.01
+#: shape std as a fraction of the mode's largest measured component when no shape_std (5 %)
+DEFAULT_SHAPE_STD_REL = 0.05
 #: relative frequency distance that an unmatched mode is charged (see module docstring)
 DEFAULT_UNMATCHED_WINDOW = 0.1
 FORMULATION_NAME = "gaussian"

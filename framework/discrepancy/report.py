@@ -115,7 +115,7 @@ def study_figure(cases: pd.DataFrame, path: Path) -> None:
     one panel per structure (the ``cases`` table)."""
     ok = cases[cases["status"] == "completed"].copy()
     ok["outcome"] = np.select(
-        [ok[c].astype(bool) for c in ("correct", "wrong", "false_discovery", "missed", "partial")],
+        [ok[c].astype(bool) for c in ("correct", "wrong", "false_discovery", "missed", "subset_named")],
         ["correct", "wrong", "false discovery", "missed", "partial (subset named)"],
         "none (null case)",
     )
@@ -133,5 +133,30 @@ def study_figure(cases: pd.DataFrame, path: Path) -> None:
         ax.plot(lim, lim, "k--", lw=0.7)
         ax.set(xscale="log", yscale="log", xlabel="max |freq error| before (%)", ylabel="after (%)", title=structure)
         ax.legend(fontsize=7)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110, tight=False)
+
+
+def power_figure(cases: pd.DataFrame, path: Path) -> None:
+    """Power curve: rate of the correct effect and location named against the hidden effect's
+    magnitude, one line per noise level, one panel per structure (cases with the hidden
+    effect among the candidates)."""
+    ok = cases[(cases["status"] == "completed") & (cases["hidden_effect"] != "none")]
+    if "hidden_in_candidates" in ok:
+        ok = ok[ok["hidden_in_candidates"].astype(bool)]
+    structures = sorted(ok["structure"].unique())
+    n = max(len(structures), 1)
+    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.6), squeeze=False)
+    for ax, structure in zip(axes[0], structures):
+        d = ok[ok["structure"] == structure]
+        for noise, dd in d.groupby("noise"):
+            g = dd.groupby("magnitude")
+            ax.plot(g["variant_correct"].mean().index, g["variant_correct"].mean().to_numpy(), "o-",
+                    label=f"{noise} (effect+location)")  # fmt: skip
+            ax.plot(g["correct"].mean().index, g["correct"].mean().to_numpy(), "x--", alpha=0.6,
+                    label=f"{noise} (effect)")  # fmt: skip
+        ax.set(xlabel="magnitude of the hidden effect (1 = full)", ylabel="rate named correctly", title=structure,
+               ylim=(-0.03, 1.03))  # fmt: skip
+        ax.legend(fontsize=6)
     fig.tight_layout()
     save_figure(fig, path, dpi=110, tight=False)

@@ -32,7 +32,7 @@ from framework.discrepancy.workflow import Diagnosis
 from framework.objectives import correlation_table
 from framework.parameters import Parameter
 
-TABLES = ("summary", "rounds", "candidates", "modes", "parameters", "comac")
+TABLES = ("summary", "rounds", "candidates", "modes", "parameters", "comac", "screen")
 
 
 def diagnosis_rows(d: Diagnosis) -> dict[str, list[dict]]:
@@ -44,6 +44,7 @@ def diagnosis_rows(d: Diagnosis) -> dict[str, list[dict]]:
         "modes": mode_rows(d),
         "parameters": parameter_rows(d),
         "comac": comac_rows(d),
+        "screen": [{"round": r.index + 1, **row} for r in d.rounds for row in r.screen],
     }
 
 
@@ -63,6 +64,20 @@ def summary_row(d: Diagnosis) -> dict:
     row["loo_best_round1"] = str(first.loc[first["loo_chi2"].idxmin(), "effect"]) if has_loo else ""
     meta = d.measured.meta or {}
     row["hidden_variant"] = "+".join(v for v in meta.get("hidden", {}).values() if v)
+    row["named_location"] = row["named_variant"]
+    row["hidden_location"] = row["hidden_variant"]
+    if first is not None:
+        best = first.iloc[0]
+        others = first[(first["effect"] != best["effect"]) & (first["effect"] != NO_CHANGE)]
+        margin = float(others["bic"].min() - best["bic"]) if len(others) else math.inf
+        row["bic_best_variant_round1"] = str(best["variant"])
+        row["bic_decisive_round1"] = bool(best["effect"] != NO_CHANGE and best["delta_bic_vs_none"] > 10.0
+                                          and margin > 10.0)  # fmt: skip
+        if "log_evidence" in first and first["log_evidence"].notna().any():
+            ev = first.loc[first["log_evidence"].idxmax()]
+            row["evidence_best_round1"] = str(ev["effect"])
+            row["evidence_best_variant_round1"] = str(ev["variant"])
+            row["evidence_named_round1"] = bool(first["evidence_named"].any())
     row["truth"] = json.dumps(meta["truth_parameters"]) if "truth_parameters" in meta else ""
     row["fitted"] = json.dumps(dict(zip(d.after.parameters.names, map(float, d.after.theta))))
     row["n_evaluations"] = int(d.n_evaluations)
@@ -92,7 +107,12 @@ def candidate_rows(d: Diagnosis) -> list[dict]:
         fits = {NO_CHANGE: r.fit} | r.candidate_fits
         table = r.ranking.table.rename(columns={"variant": "effect_variant"})
         for rec in table.to_dict("records"):
-            rows.append({"round": r.index + 1, "model": fits[rec["effect"]].label, **rec})
+            f = fits[rec["effect"]]
+            own = {p.name: float(v) for p, v in zip(f.parameters, f.theta)
+                   if rec["effect"] != NO_CHANGE and p in d.catalogue.effects[rec["effect"]].parameters}  # fmt: skip
+            rec["fitted_effect"] = json.dumps(own)
+            rec["fitted_all"] = json.dumps(dict(zip(f.parameters.names, map(float, f.theta))))
+            rows.append({"round": r.index + 1, "model": f.label, **rec})
     return rows
 
 

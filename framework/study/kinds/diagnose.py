@@ -55,6 +55,7 @@ from pydantic import (
     model_validator,
 )
 
+from framework.discrepancy.auto import with_candidates
 from framework.discrepancy.config import MeasuredSource, data_seed, measured_of, noise_of, source_kind
 from framework.discrepancy.effects import Catalogue, get_catalogue
 from framework.discrepancy.score import NO_CHANGE
@@ -87,6 +88,9 @@ class Config(StudyHeader):
     #: effects already in the model under test {name: variant ("" or null if it has none)}
     start_effects: dict[str, str | None] = Field(default_factory=dict)
     measured: MeasuredSource
+    #: candidate effects: "catalogue" (the hand-written ones), "auto" (generated from the
+    #: OpenSees model, :mod:`framework.discrepancy.auto`), or a list of names ("auto" = all generated)
+    candidates: Literal["catalogue", "auto"] | list[str] = "catalogue"
     #: workflow settings; those left out take the catalogue's recommendation, else the default
     settings: DiagnoseSettings = Field(default_factory=DiagnoseSettings)
 
@@ -158,12 +162,13 @@ def check(cfg: Config, source: str, base_dir: Path | None = None) -> None:
 
 # ---- plan --------------------------------------------------------------------------------
 @functools.lru_cache(maxsize=16)
-def _catalogue(structure: str, options_json: str) -> Catalogue:
-    return get_catalogue(structure, **json.loads(options_json))
+def _catalogue(structure: str, options_json: str, candidates_json: str) -> Catalogue:
+    return with_candidates(get_catalogue(structure, **json.loads(options_json)), json.loads(candidates_json))
 
 
 def catalogue_of(task: dict) -> Catalogue:
-    return _catalogue(task["structure"], json.dumps(task["structure_options"], sort_keys=True))
+    return _catalogue(task["structure"], json.dumps(task["structure_options"], sort_keys=True),
+                      json.dumps(task.get("candidates", "catalogue")))  # fmt: skip
 
 
 def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
@@ -173,22 +178,44 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
         "structure_options": cfg.structure_options,
         "start_effects": {k: v or "" for k, v in cfg.start_effects.items()},
         "measured": cfg.measured.model_dump(mode="json"),
+        "candidates": cfg.candidates,
     }
-    try:
-        catalogue = catalogue_of(task)
-        # the catalogue's recommended settings, overridden by those the config gives
-        settings = DiagnoseSettings(**(dict(catalogue.settings) | cfg.settings.model_dump(exclude_unset=True)))
-        relevant = list(sweep_values)
-        gen = task["measured"]["generate"]
-        if gen is not None and not _magnitude_matters(catalogue, gen):
-            gen["magnitude"] = 1.0
-            relevant = [k for k in relevant if k != "measured.generate.magnitude"]
-    except InputError as exc:
-        raise InputError(f"study {cfg.study!r}: {exc}") from None
-    task["settings"] = settings.model_dump(mode="json")
+    relevant = list(sweep_values)
+    explicit = cfg.settings.model_dump(exclude_unset=True)
+    if not _trusted(cfg.structure):
+        # a user's module is imported only when runs (or validate --build) need it: its
+        # recommended settings are merged then, and every magnitude is planned
+        task["settings"] = None
+        task["explicit_settings"] = cfg.settings.model_dump(mode="json", exclude_unset=True)
+    else:
+        try:
+            catalogue = catalogue_of(task)
+            # the catalogue's recommended settings, overridden by those the config gives
+            settings = DiagnoseSettings(**(dict(catalogue.settings) | explicit))
+            gen = task["measured"]["generate"]
+            if gen is not None and not _magnitude_matters(catalogue, gen):
+                gen["magnitude"] = 1.0
+                relevant = [k for k in relevant if k != "measured.generate.magnitude"]
+        except InputError as exc:
+            raise InputError(f"study {cfg.study!r}: {exc}") from None
+        task["settings"] = settings.model_dump(mode="json")
     columns = run_columns(task)
     return [{"label": cfg.structure, "seed": cfg.seed + i, "task": task, "columns": columns, "relevant": relevant}
             for i in range(cfg.runs)]  # fmt: skip
+
+
+def _trusted(structure: str) -> bool:
+    """Not a user's ``module:function``: a built-in name (or an unknown one, refused when planned),
+    or a catalogue in the framework's own modules (planned by importing it)."""
+    return ":" not in structure or structure.startswith("framework.")
+
+
+def settings_of(task: dict, catalogue: Catalogue) -> dict:
+    """The run's resolved workflow settings (a user's catalogue: its recommendation + the config's)."""
+    if task.get("settings") is not None:
+        return task["settings"]
+    explicit = task.get("explicit_settings") or {}
+    return DiagnoseSettings(**(dict(catalogue.settings) | explicit)).model_dump(mode="json")
 
 
 def _magnitude_matters(catalogue: Catalogue, gen: dict) -> bool:
@@ -207,7 +234,10 @@ def run_columns(task: dict) -> dict[str, Any]:
     if gen is not None:
         noise = gen["noise"]
         columns |= {"hidden_effect": hidden_name(gen), "magnitude": float(gen["magnitude"]),
-                    "noise": noise if isinstance(noise, str) else "custom"}  # fmt: skip
+                    "noise": noise if isinstance(noise, str) else "custom",
+                    "data_stds": bool(gen.get("stds", True))}  # fmt: skip
+    candidates = task.get("candidates", "catalogue")
+    columns["candidates"] = candidates if isinstance(candidates, str) else "+".join(candidates)
     return columns
 
 
@@ -228,10 +258,11 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
     seen = set()
     for spec in specs:
         task = spec["task"]
-        key = json.dumps({k: task[k] for k in ("structure", "structure_options", "start_effects", "measured")},
+        key = json.dumps({k: task[k] for k in ("structure", "structure_options", "start_effects", "measured",
+                                               "candidates")},
                          sort_keys=True)  # fmt: skip
-        if key in seen:
-            continue
+        if key in seen or not (build_references or _trusted(task["structure"])):
+            continue  # a user's module is imported only with build_references (gomu validate --build, runs)
         seen.add(key)
         builtin = task["measured"].get("builtin") or ""
         if not build_references and ":" in builtin:  # gomu validate imports no code named in the config
@@ -253,6 +284,7 @@ def _check_task(task: dict) -> None:
     from framework.problem import UpdatingProblem
 
     catalogue = catalogue_of(task)
+    settings_of(task, catalogue)
     start = catalogue.check_active(task["start_effects"])
     gen = task["measured"]["generate"]
     if gen is not None:
@@ -276,6 +308,7 @@ def run(spec: dict) -> dict[str, list[dict]]:
     catalogue = catalogue_of(task)
     try:
         measured = measured_of(task["measured"], catalogue, spec["seed"])
+        task = {**task, "settings": settings_of(task, catalogue)}
         diagnosis = diagnose(catalogue, measured, DiagnoseSettings(**task["settings"]), start=task["start_effects"])
     except (ModelEvaluationError, InputError) as exc:
         log.warning("diagnosis %s seed %s failed: %s", spec["label"], spec["seed"], exc)
@@ -284,6 +317,9 @@ def run(spec: dict) -> dict[str, list[dict]]:
     else:
         tables = diagnosis_rows(diagnosis)
         tables["summary"][0] |= {"status": "completed", "error": ""}
+        hidden = (measured.meta or {}).get("hidden")
+        if hidden is not None:
+            tables["summary"][0]["hidden_in_candidates"] = set(hidden) <= set(catalogue.candidate_effects())
     summary = tables["summary"][0]
     summary |= {"case": case_name(task, spec["seed"], summary.get("data", "")), **run_facts(task, spec["seed"])}
     summary["wall_s"] = time.perf_counter() - t0
@@ -319,25 +355,26 @@ def run_facts(task: dict, seed: int) -> dict[str, Any]:
         facts |= {"builtin": measured["builtin"], "builtin_case": measured["case"]}
     facts["start_effects"] = "+".join(f"{k}[{v}]" if v else k for k, v in task["start_effects"].items())
     facts["structure_options"] = json.dumps(task["structure_options"], sort_keys=True)
-    facts |= {("calibration_seed" if k == "seed" else k): v for k, v in task["settings"].items()}
+    facts |= {("calibration_seed" if k == "seed" else k): v for k, v in (task["settings"] or {}).items()}
     return facts
 
 
 # ---- analyses and figures ----------------------------------------------------------------
 def analyses(tables: dict, report: dict) -> dict:
     """``cases`` and ``rates`` when ``report.outcomes`` is true."""
-    from framework.discrepancy.outcomes import cases, rates
+    from framework.discrepancy.outcomes import agreement, cases, rates, targets
 
     options = ReportConfig.model_validate(report or {})
     if not options.outcomes or "summary" not in tables:
         return {}
     scored = cases(tables["summary"])
-    return {"cases": scored, "rates": rates(scored)}
+    return {"cases": scored, "rates": rates(scored), "targets": targets(scored),
+            "agreement": agreement(tables["summary"])}  # fmt: skip
 
 
 def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
     """discrepancy.png (a study of one run), showcase/<case>.png, study.png (see module docstring)."""
-    from framework.discrepancy.report import case_figure, study_figure
+    from framework.discrepancy.report import case_figure, power_figure, study_figure
 
     options = ReportConfig.model_validate(report or {})
     out_dir = Path(out_dir)
@@ -363,6 +400,8 @@ def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
     if options.outcomes and tables.get("cases") is not None and not tables["cases"].empty:
         study_figure(tables["cases"], out_dir / "study.png")
         written.append(out_dir / "study.png")
+        power_figure(tables["cases"], out_dir / "power.png")
+        written.append(out_dir / "power.png")
     return written
 
 
@@ -397,14 +436,24 @@ def diagnose_command(path: str, overrides: list[str] | None = None, output: str 
     if s["status"] != "completed":
         sys.stderr.write(f"{cfg.study}: diagnosis failed: {s['error']}\ntables in {out}\n")
         return 1
+    named = s["named_effect"]
+    if isinstance(s.get("named_location"), str) and s["named_location"]:
+        named += f" at {s['named_location']}"
+    if s.get("partial"):
+        named += " (partial explanation)"
     lines = [
         f"{cfg.study}: {s['conclusion']}",
-        f"named effect(s): {s['named_effect']}",
+        f"rounds: {s['headline']}",
+        f"named effect(s): {named}",
         f"gap before: max |freq error| {s['max_freq_error_pct_before']:.2f} %, min MAC {s['min_mac_before']:.3f}, "
         f"unmatched {s['n_unmatched_before']} (chi2 {s['chi2_before']:.1f}, p {s['p_before']:.3g})",
         f"gap after:  max |freq error| {s['max_freq_error_pct_after']:.2f} %, min MAC {s['min_mac_after']:.3f}, "
         f"unmatched {s['n_unmatched_after']} (chi2 {s['chi2_after']:.1f}, p {s['p_after']:.3g})",
         f"tables and figure in {out}",
     ]
+    if isinstance(s.get("flags"), str) and s["flags"]:
+        lines.insert(3, f"flags: {s['flags']}")
+    if isinstance(s.get("noise_warning"), str) and s["noise_warning"]:
+        lines.insert(1, s["noise_warning"])
     sys.stdout.write("\n".join(lines) + "\n")
     return 0
