@@ -70,9 +70,10 @@ def _cmd_validate(args) -> int:
 
 def _named_code(data: dict) -> set[str]:
     """The ``module:function`` references of a config (the only fields that may name code:
-    structure.name, measured.builtin, validation[].measured.builtin)."""
+    structure.name, measured.builtin, validation[].measured.builtin; a diagnose config's
+    structure)."""
     structure = data.get("structure")
-    names = [structure.get("name") if isinstance(structure, dict) else None]
+    names = [structure.get("name") if isinstance(structure, dict) else structure]
     sections = [data.get("measured")] + [v.get("measured") for v in data.get("validation") or [] if isinstance(v, dict)]
     names += [m.get("builtin") for m in sections if isinstance(m, dict)]
     return {n for n in names if isinstance(n, str) and ":" in n}

@@ -143,37 +143,16 @@ def get_catalogue(name: str, **options) -> Catalogue:
     if name in CATALOGUES:
         module, attr = path.split(":", 1)
         fn = getattr(importlib.import_module(module), attr)
-<<<<<<< HEAD
     else:  # user code: the registry's trust rules (a function defined in a user module)
         from framework.models.registry import resolve
 
         fn = resolve(path, f"structure={name!r}")
     try:
-        catalogue = fn(**options)
-    except InputError:
-        raise
-    except TypeError as exc:
-        raise InputError(f"structure {name!r}: bad catalogue options {sorted(options)}: {exc}") from None
-    except Exception as exc:
-        raise InputError(f"structure {name!r}: building the catalogue failed: {type(exc).__name__}: {exc}") from None
-    if not isinstance(catalogue, Catalogue):
-        raise InputError(f"structure {name!r}: {path!r} returned {type(catalogue).__name__}, not a Catalogue")
-    return catalogue
-=======
-    except ModuleNotFoundError as exc:
-        raise InputError(f"structure {name!r}: cannot import catalogue {path!r}: {exc} (gomu imports modules "
-                         "from the current folder and PYTHONPATH: run gomu in the folder that holds the module)"
-                         ) from None  # fmt: skip
-    except (ImportError, AttributeError) as exc:
-        raise InputError(f"structure {name!r}: cannot import catalogue {path!r}: {exc}") from exc
-    except Exception as exc:  # a user's module can raise anything while imported
-        raise InputError(f"structure {name!r}: importing {module!r} failed: {type(exc).__name__}: {exc}") from None
-    try:
         out = fn(**options)
     except InputError:
         raise
     except TypeError as exc:
-        raise InputError(f"structure {name!r}: bad catalogue options {sorted(options)}: {exc}") from exc
+        raise InputError(f"structure {name!r}: bad catalogue options {sorted(options)}: {exc}") from None
     except Exception as exc:  # a user's build can raise anything: one line naming module and error
         raise InputError(f"structure {name!r}: {path} failed: {type(exc).__name__}: {exc}") from None
     if isinstance(out, Catalogue):
@@ -195,4 +174,3 @@ def catalogue_of_model(model, structure: str = "user_model", n_measured_modes: i
 
     return Catalogue(structure, model.parameters, {}, factory, n_measured_modes or model.n_modes,
                      description=f"{model.name}")  # fmt: skip
->>>>>>> diag17
