@@ -80,15 +80,16 @@ def posterior_figures(tables: dict, out_dir: Path) -> list[Path]:
         fig, ax = plt.subplots(figsize=(7, 3.5))
         labels = [f"{c}\n{m}" for c, m in zip(first["case"], first["mode"])]
         x = np.arange(len(first))
-        ax.errorbar(x, first["mean_hz"], yerr=[first["mean_hz"] - first["pi90_lower_hz"],
-                                               first["pi90_upper_hz"] - first["mean_hz"]],
-                    fmt="none", ecolor="0.7", elinewidth=6, label="90 % predictive (with noise)")
-        ax.errorbar(x, first["mean_hz"], yerr=[first["mean_hz"] - first["ci90_lower_hz"],
-                                               first["ci90_upper_hz"] - first["mean_hz"]],
+        fe = first["f_measured_hz"].to_numpy()
+        rel = lambda col: 100.0 * (first[col].to_numpy() - fe) / fe  # noqa: E731
+        mean = rel("mean_hz")
+        ax.errorbar(x, mean, yerr=[mean - rel("pi90_lower_hz"), rel("pi90_upper_hz") - mean],
+                    fmt="none", ecolor="0.75", elinewidth=6, label="90 % predictive (with noise)")
+        ax.errorbar(x, mean, yerr=[mean - rel("ci90_lower_hz"), rel("ci90_upper_hz") - mean],
                     fmt="o", color="C0", ms=3, capsize=3, label="90 % credible (model)")
-        ax.plot(x, first["f_measured_hz"], "x", color="C3", label="measured")
+        ax.axhline(0.0, color="C3", lw=1, label="measured")
+        ax.set_ylabel("(f_model - f_measured) / f_measured [%]")
         ax.set_xticks(x, labels, fontsize=6)
-        ax.set_ylabel("frequency [Hz]")
         ax.legend(fontsize=7)
         fig.tight_layout()
         path = out_dir / "predictive.png"
