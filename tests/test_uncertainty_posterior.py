@@ -140,3 +140,28 @@ def test_bad_sampler_settings_are_input_errors(tmp_path):
 
     with pytest.raises(InputError, match="burn"):
         plan(_config(tmp_path, "bad", sampler={"walkers": 8, "steps": 100, "burn": 100}))
+
+
+@pytest.mark.parametrize("structure, measured, options", [("lab_frame_3dof", "lab_frame", {}),
+                                                          ("beam", "beam", {"n_modes": 5})])
+def test_population_likelihood_equals_the_problems_residuals(structure, measured, options):
+    """The one-call Gaussian residuals of a population equal UpdatingProblem.evaluate's, point
+    by point, on measured and on simulated data, in process and through a process runner."""
+    from framework.parallel import make_evaluation_runner
+    from framework.study.kinds.posterior import build
+    from framework.uncertainty.batch import gaussian_residuals_batch
+
+    for simulate in (None, {"frequency_std_rel": 0.005, "shape_std_rel": 0.02}):
+        task = {"structure": {"name": structure, "options": options}, "measured": {"builtin": measured, "case": "base"},
+                "parameters": {}, "objective": {"formulation": "gaussian", "failure_penalty": 1e12},
+                "prior": {"kind": "uniform", "width": 0.25}, "noise": {"frequency_std_rel": 0.005, "shape_std_rel": 0.02},
+                "simulate": simulate}
+        problem, noise, _, _ = build(task, np.random.default_rng(0))
+        X = np.random.default_rng(1).random((12, problem.n_params))
+        expected = problem.evaluate(X).residuals
+        np.testing.assert_allclose(gaussian_residuals_batch(problem, X), expected, rtol=1e-10, atol=1e-12)
+    runner, close = make_evaluation_runner("processes", workers=2)
+    try:
+        np.testing.assert_allclose(gaussian_residuals_batch(problem, X, runner), expected, rtol=1e-10, atol=1e-12)
+    finally:
+        close()

@@ -311,9 +311,10 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
 
 
 def _log_likelihood_x(problem, noise, runner):
+    from framework.uncertainty.batch import log_likelihood_batch
+
     def log_like(X):
-        ev = problem.evaluate(X, runner)
-        return noise.log_likelihood(ev.residuals, ev.ok)
+        return log_likelihood_batch(problem, noise, np.atleast_2d(X), runner)
 
     return log_like
 
