@@ -29,10 +29,14 @@ def coverage_table(parameters: pd.DataFrame | None) -> pd.DataFrame | None:
 
 
 def agreement_table(parameters: pd.DataFrame | None) -> pd.DataFrame | None:
-    """Per run and parameter: sampled mean - MAP in sampled std, lin_std / std, and whether the
-    sampled and linearized posteriors agree (|shift| <= 0.1, |ratio - 1| <= 0.2)."""
+    """Per run on measured data and parameter: sampled mean - MAP in sampled std, lin_std / std,
+    and whether the sampled and linearized posteriors agree (|shift| <= 0.1, |ratio - 1| <= 0.2)."""
     if parameters is None or "mean_shift_std" not in parameters:
         return None
+    if "truth" in parameters:  # runs on simulated data are summarized by the coverage table
+        parameters = parameters[parameters["truth"].isna()]
+        if parameters.empty:
+            return None
     cols = [c for c in ("structure", "variant", "run_id", "seed", "parameter", "map", "mean", "lin_std", "std",
                         "mean_shift_std", "std_ratio") if c in parameters]
     out = parameters[cols].copy()
