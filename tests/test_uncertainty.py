@@ -159,3 +159,25 @@ def test_updating_run_reports_linearized_columns(tmp_path):
     assert len(ident) == 6
     worst = ident.sort_values("singular_value").iloc[0]
     assert worst["dominant_parameter"] == "kxy" and worst["information_ratio"] > 1
+
+
+@pytest.mark.smu
+def test_four_story_singular_values_name_alpha_4_least_determined():
+    """SMU four-storey frame (skipped without the data): at the MAP point of the Gaussian
+    likelihood the least-determined direction is alpha_4, with a std several times the others'."""
+    from framework.discrepancy.likelihood import objective_spec, with_noise_model
+    from framework.models import smu
+    from framework.study.kinds.posterior import map_point
+    from framework.uncertainty.linearized import at_optimum
+
+    if not smu.available():
+        pytest.skip(f"SMU data not found in {smu.smu_dir()}")
+    model = smu.make_four_story(measured_floors=[1, 2, 3, 4], n_modes=4)
+    problem = UpdatingProblem(model, with_noise_model(smu.four_story_measured("base")), objective=objective_spec())
+    noise, prior = noise_model(problem), Prior(problem.parameters)
+    x = map_point(problem, noise, prior, np.random.default_rng(0), 2)
+    lin = at_optimum(problem, x, noise, prior)
+    last = lin.identifiability_rows()[-1]
+    assert last["dominant_parameter"] == "alpha_4"
+    std = dict(zip(lin.names, lin.std))
+    assert std["alpha_4"] > 2.5 * max(std["alpha_1"], std["alpha_2"], std["alpha_3"])

@@ -193,16 +193,18 @@ class Prior:
 
 def log_posterior_x(problem, noise: NoiseModel, prior: Prior, runner=None):
     """ln p(x | data) + const of normalized points X (n, k) as a function (for the samplers):
-    ln L(theta(x)) + ln p(theta(x)); -inf outside [0, 1]^k or where the evaluation failed."""
+    ln L(theta(x)) + ln p(theta(x)); -inf outside [0, 1]^k or where the evaluation failed
+    (the Gaussian formulation's population in one call, :mod:`framework.uncertainty.batch`)."""
 
     def log_prob(X: np.ndarray) -> np.ndarray:
         X = np.atleast_2d(np.asarray(X, float))
         inside = np.all((X >= 0.0) & (X <= 1.0), axis=1)
         out = np.full(len(X), -np.inf)
         if inside.any():
-            ev = problem.evaluate(X[inside], runner)
+            from framework.uncertainty.batch import log_likelihood_batch
+
             theta = problem.parameters.to_physical(X[inside])
-            out[inside] = noise.log_likelihood(ev.residuals, ev.ok) + prior.log_pdf(theta)
+            out[inside] = log_likelihood_batch(problem, noise, X[inside], runner) + prior.log_pdf(theta)
         return out
 
     return log_prob
