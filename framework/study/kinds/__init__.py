@@ -39,6 +39,7 @@ KINDS: dict[str, str] = {
     "identification": "framework.study.kinds.identification",
     "analysis": "framework.study.kinds.analysis",
     "diagnose": "framework.study.kinds.diagnose",
+    "damage": "framework.study.kinds.damage",
 }
 
 
