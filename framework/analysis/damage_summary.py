@@ -24,10 +24,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from framework.damage import DETECTION_THRESHOLD as DEFAULT_THRESHOLD
 from framework.errors import InputError
 
-#: damage index above which an element is reported damaged (see framework.damage)
-DEFAULT_THRESHOLD = 0.05
 GROUP = ["noise_pct", "measured_mesh", "method", "state"]
 
 
