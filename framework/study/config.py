@@ -31,11 +31,7 @@ from framework.study.kinds import get_kind
 from framework.study.schema import StudyHeader, format_error, validated
 from framework.textio import parse_override_value, read_yaml_file
 
-__all__ = ["StudyConfig", "format_error", "load", "parse_value", "read_with_overrides", "set_path", "validate"]
-
-#: the type of a validated config (the run kind's schema is a subclass)
-StudyConfig = StudyHeader
-
+__all__ = ["format_error", "load", "parse_value", "read_with_overrides", "set_path", "validate"]
 
 def parse_value(text: str, source: str = "--set") -> Any:
     """A --set value: YAML scalar/list syntax (``40``, ``1e-6``, ``[5, 10]``, ``true``)."""

@@ -40,6 +40,7 @@ KINDS: dict[str, str] = {
     "analysis": "framework.study.kinds.analysis",
     "diagnose": "framework.study.kinds.diagnose",
     "posterior": "framework.study.kinds.posterior",
+    "damage": "framework.study.kinds.damage",
 }
 
 
