@@ -14,8 +14,9 @@ an independent Gaussian error with a standard deviation s_i implied by the data:
   whitened by the data's standard deviations, s_i = 1;
 - any other formulation: s_i = 1 (residuals taken as standard normal; named as assumed).
 
-Where the data give no standard deviation, sigma_f = 0.5 % f_e and s_rel = 0.02 (the defaults
-of :mod:`framework.discrepancy.likelihood`); every default used is written in the
+Where the data give no standard deviation, sigma_f = 0.5 % f_e and s_rel = 0.02 (this
+module's defaults; the diagnosis's noise test assumes a more conservative 1 % and 5 %, see
+:mod:`framework.discrepancy.likelihood`); every default used is written in the
 ``noise_assumed`` text, "" when all standard deviations come from the data. Penalty rows
 (ratio constraints, Tikhonov) are not data and are left out of the likelihood.
 
