@@ -35,6 +35,7 @@ ANALYSES: dict[str, str] = {
     "modes": "framework.analysis.modes",
     "updating_summary": "framework.analysis.updating_summary",
     "choices": "framework.analysis.choices",
+    "congruence": "framework.analysis.congruence",
 }
 
 

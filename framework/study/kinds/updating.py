@@ -58,6 +58,8 @@ class MeasuredConfig(Strict):
 
     builtin: str | None = None
     case: str = "base"
+    #: keywords for a built-in data set's provider (e.g. the lab frame's ``congruence``)
+    options: dict[str, Any] = Field(default_factory=dict)
     file: str | None = None
     #: for a UFF file (.unv/.uff): the mapping file from test node + direction to model DOF
     mapping: str | None = None
@@ -267,7 +269,7 @@ def measured_from(cfg: dict) -> MeasuredModes:
     if cfg.get("file"):
         m = load_measured(cfg["file"], cfg.get("mapping"))
     else:
-        m = builtin_measured(cfg["builtin"], cfg.get("case", "base"))
+        m = builtin_measured(cfg["builtin"], cfg.get("case", "base"), **(cfg.get("options") or {}))
     if cfg.get("modes"):
         m = m.select_modes(cfg["modes"], where=f"{m.source}: measured.modes")
     return m
