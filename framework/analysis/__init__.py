@@ -36,6 +36,7 @@ ANALYSES: dict[str, str] = {
     "updating_summary": "framework.analysis.updating_summary",
     "choices": "framework.analysis.choices",
     "congruence": "framework.analysis.congruence",
+    "timing": "framework.analysis.timing",
 }
 
 
