@@ -30,7 +30,7 @@ if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c 'import sys; assert sys.ve
   .venv/bin/python -m pip install -q --upgrade pip
 fi
 
-EXTRAS="${GOMU_EXTRAS:-test,ident,exchange}"
+EXTRAS="${GOMU_EXTRAS:-test,ident,exchange,uq}"
 STAMP=".venv/.gomu-installed"
 WANT="$(cat pyproject.toml | sha1sum | cut -c1-16)-$EXTRAS"
 if [ ! -f "$STAMP" ] || [ "$(cat "$STAMP")" != "$WANT" ]; then

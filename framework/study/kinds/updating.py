@@ -15,7 +15,13 @@ cases with the updated values. Tables:
   (no rows for a failed run: a failed point is not an updated value);
 - ``modes``: run x case x measured mode: f_measured_hz, f_model_hz, error_pct, mac, matched;
 - ``history``: best objective so far at every evaluation where it improved, and the last;
-- ``extra``: optimizer-specific facts as JSON text (SNT minima, singular values, ...).
+- ``extra``: optimizer-specific facts as JSON text (SNT minima, singular values, ...);
+- ``identifiability``: run x singular direction of the whitened Jacobian at the optimum.
+
+The linearized uncertainty at the optimum (:mod:`framework.uncertainty.tables`, one Jacobian
+per run, never fatal) adds ``chi2``, ``n_data``, ``log_evidence_laplace``, ``uq_jacobian``,
+``uq_error`` to ``runs`` and ``std``, ``ci90_lower``, ``ci90_upper`` (physical units),
+``noise_assumed`` to ``parameters``.
 """
 
 from __future__ import annotations
@@ -41,7 +47,7 @@ from framework.study.schema import Strict, StudyHeader
 
 log = logging.getLogger(__name__)
 
-TABLES = ("runs", "parameters", "modes", "history", "extra")
+TABLES = ("runs", "parameters", "modes", "history", "extra", "identifiability")
 
 #: largest magnitude accepted for a bound or initial value (keeps spans finite)
 MAX_MAGNITUDE = 1e100
@@ -416,12 +422,17 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
     tables["extra"] = extra_rows({k: v for k, v in result.extra.items() if k != "run_columns"})
     if failed:
         return tables
+    from framework.uncertainty.tables import linearized_columns
+
+    uq = linearized_columns(problem, result.x_best, runner=runner)
+    tables["runs"][0].update(uq["run"])
+    tables["identifiability"] = uq["identifiability"]
     params = problem.parameters
     ratios = params.to_ratio(result.theta_best)
-    for p, value, ratio, x in zip(params, result.theta_best, ratios, result.x_best):
+    for p, value, ratio, x, extra in zip(params, result.theta_best, ratios, result.x_best, uq["parameters"]):
         tables["parameters"].append({"parameter": p.name, "unit": p.unit, "initial": p.initial, "lower": p.lower,
                                      "upper": p.upper, "value": float(value), "ratio": float(ratio),
-                                     "normalized": float(x)})
+                                     "normalized": float(x), **extra})
     tables["modes"] += mode_rows("base", problem, result.theta_best, runner)
     theta = params.as_dict(result.theta_best)
     for case in task.get("validation", []):
