@@ -2,7 +2,8 @@
 
 plan -> check the inputs (the kind's preflight) -> claim the output folder -> execute the
 runs not stored yet (serial, processes or Dask) -> one atomic part per finished run ->
-consolidate the tables -> analyses (table -> table) -> figures (from the tables).
+consolidate the tables -> mode-shape tables (:mod:`framework.shapes.stage`) -> analyses
+(table -> table) -> figures (from the tables).
 ``report(results_dir)`` redoes the last two from the stored tables and config alone.
 """
 
@@ -15,8 +16,10 @@ import pandas as pd
 import yaml
 
 from framework.errors import InputError
+from framework.figures import shape_figures
 from framework.parallel import map_unordered
 from framework.provenance import write_provenance
+from framework.shapes.stage import write_shape_tables
 from framework.study.execute import error_tables, execute_run
 from framework.study.kinds import get_kind
 from framework.study.plan import plan
@@ -83,6 +86,7 @@ def run_study(
     finally:
         bar.close()
     tables = store.consolidate(wanted, kind.TABLES)
+    write_shape_tables(out, tables, cfg)  # mode shapes and MAC of the initial and best model
     derive(out, tables, cfg, figures=figures)
     return tables
 
@@ -113,6 +117,8 @@ def derive(out: Path, tables: dict[str, pd.DataFrame], cfg: StudyHeader, figures
             written += list(draw(tables, out, cfg.report))
         except Exception as exc:
             log.warning("figures of %s failed: %s", out, exc)
+    if figures:
+        written += shape_figures(out)
     return written
 
 
