@@ -41,6 +41,15 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_report(args) -> int:
+    if args.reproduction:
+        from framework.analysis.reproduction import write
+
+        if not Path(args.reproduction).is_dir():
+            raise InputError(f"report --reproduction: results folder {args.reproduction!r} not found")
+        sys.stdout.write(f"{write(args.reproduction, args.output)}\n")
+        return 0
+    if not args.results_dir:
+        raise InputError("report: give a results folder, or --reproduction RESULTS")
     from framework.study.runner import report
 
     files = report(Path(args.results_dir))
@@ -96,7 +105,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(fn=_cmd_run)
 
     rep = sub.add_parser("report", help="regenerate all figures from a results folder's tables")
-    rep.add_argument("results_dir")
+    rep.add_argument("results_dir", nargs="?")
+    rep.add_argument("--reproduction", metavar="RESULTS", default=None,
+                     help="write the reproduction report (source vs ours) from the tables under RESULTS")
+    rep.add_argument("--output", default="docs/reproduction.md", help="the reproduction report's file")
     rep.set_defaults(fn=_cmd_report)
 
     v = sub.add_parser("validate", help="check a config and its data without running anything")
