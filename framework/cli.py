@@ -41,6 +41,15 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_report(args) -> int:
+    if args.reproduction:
+        from framework.analysis.reproduction import write
+
+        if not Path(args.reproduction).is_dir():
+            raise InputError(f"report --reproduction: results folder {args.reproduction!r} not found")
+        sys.stdout.write(f"{write(args.reproduction, args.output)}\n")
+        return 0
+    if not args.results_dir:
+        raise InputError("report: give a results folder, or --reproduction RESULTS")
     from framework.study.runner import report
 
     files = report(Path(args.results_dir), shapes=args.shapes)
@@ -120,11 +129,14 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(fn=_cmd_run)
 
     rep = sub.add_parser("report", help="regenerate all figures from a results folder's tables")
-    rep.add_argument("results_dir")
+    rep.add_argument("results_dir", nargs="?")
     rep.add_argument("--shapes", action="store_true",
                      help="(re)compute the mode-shape tables first (builds the model; for folders of earlier versions)")
     rep.add_argument("--html", action="store_true",
                      help="also write interactive 3-D mode shapes (shapes_<state>.html; needs the viz extra, plotly)")
+    rep.add_argument("--reproduction", metavar="RESULTS", default=None,
+                     help="write the reproduction report (source vs ours) from the tables under RESULTS")
+    rep.add_argument("--output", default="docs/reproduction.md", help="the reproduction report's file")
     rep.set_defaults(fn=_cmd_report)
 
     v = sub.add_parser("validate", help="check a config and its data without running anything")

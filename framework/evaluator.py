@@ -54,6 +54,21 @@ class EvaluationRecord:
     best_objective: float
 
 
+def concat_evaluations(parts: list[Evaluations]) -> Evaluations:
+    """Evaluations of single points stacked into one (the pointwise path)."""
+    sources = [e.source for e in parts]
+    return Evaluations(
+        objective=np.concatenate([e.objective for e in parts]),
+        residuals=np.vstack([e.residuals for e in parts]),
+        objectives=np.vstack([e.objectives for e in parts]),
+        ok=np.concatenate([e.ok for e in parts]),
+        reasons=[r for e in parts for r in e.reasons],
+        details=[d for e in parts for d in e.details],
+        correlations=[c for e in parts for c in e.correlations],
+        source=None if any(s is None for s in sources) else concat_evaluations(sources),
+    )
+
+
 class BudgetExhausted(Exception):
     """Raised before an evaluation that would exceed the run's evaluation budget."""
 
@@ -68,8 +83,11 @@ class Evaluator:
         runner: Runner | None = None,
         progress: Callable[[int], object] | None = None,
         parent: Evaluator | None = None,
+        pointwise: bool = False,
     ):
         self.problem = problem
+        #: evaluate a population one point per call (as the source's toolboxes did; for timing)
+        self.pointwise = pointwise if parent is None else parent.pointwise
         self.max_evaluations = max_evaluations
         self.runner = runner if parent is None else parent.runner
         self.progress = progress
@@ -128,6 +146,8 @@ class Evaluator:
         if len(X) == 1 and self.cost == 1 and hasattr(self.problem, "jacobian"):
             ev = self.problem.evaluate(X, self.runner, keep_results=True)
             self._last = (X[0].tobytes(), ev.results[0], ev.residuals[0])
+        elif self.pointwise and len(X) > 1:
+            ev = concat_evaluations([self.problem.evaluate(X[i:i + 1], self.runner) for i in range(len(X))])
         else:
             ev = self.problem.evaluate(X, self.runner)
         self._record(X, ev)

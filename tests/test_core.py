@@ -131,7 +131,9 @@ def test_evaluator_counts_budgets_and_records_failures():
 def test_sensitivities_are_not_counted_and_widen_keeps_steps_forward():
     from framework.sensitivity import sensitivity_matrix
 
-    problem = lab_problem()
+    # torsion in sensor units (theta b/2): at the all-upper corner every mode stays paired
+    # (in radians, the default reading, the 1st x mode pairs with no model mode there)
+    problem = UpdatingProblem(make_model(congruence="model"), measured(congruence="model"))
     at_upper = problem.parameters.upper.copy()
     backward = sensitivity_matrix(problem, theta0=at_upper)
     forward = sensitivity_matrix(problem, theta0=at_upper, widen=(0.01, 4.0))

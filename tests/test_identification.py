@@ -389,7 +389,8 @@ def test_lab_update_from_identified_modes_recovers_true_parameters(lab_sweep):
 
     res = pl.identify(lab_sweep, LAB_SETTINGS)
     measured = pl.to_measured_modes(res.selected, "lab_identified", lab_tests.MODE_LABELS)
-    problem = UpdatingProblem(lab_frame.make_model(), measured)
+    # identified torsion is theta b/2 (sensor units): the model's "model" congruence
+    problem = UpdatingProblem(lab_frame.make_model(congruence="model"), measured)
     budget = Budget(max_evaluations=20000, stall_iterations=50, target_objective=1e-12)
     result = run_optimizer("sm", problem, 1, budget)
     assert result.objective < 1e-8

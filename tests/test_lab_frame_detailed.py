@@ -60,11 +60,18 @@ def test_total_mass_centre_of_mass_and_polar_moment():
 
 
 def test_added_mass_goes_to_the_slab_centre():
+    from framework.models.lab_frame import block_dimensions
+
     props = lfd.mass_properties(added_mass_kg=1.379)
     assert props["total_kg"] == pytest.approx(17.5 + 1.379, rel=1e-6)
-    # a mass at the origin keeps the static moments and the polar moment about the centre
+    # a block at the origin keeps the static moments; the polar moment about the centre
+    # grows by the block's own J = m d^2 / 8 (steel cylinder, h = d: 6.35e-4 kg m^2)
     assert props["xcm_m"] * props["total_kg"] == pytest.approx(-0.0103 * 17.5, rel=1e-6)
-    assert props["polar_about_centre_kg_m2"] == pytest.approx(1.2645, rel=1e-6)
+    j_block = block_dimensions(1.379)["polar_inertia_kg_m2"]
+    assert j_block == pytest.approx(6.35e-4, rel=1e-3)
+    assert props["polar_about_centre_kg_m2"] == pytest.approx(1.2645 + j_block, rel=1e-6)
+    point = lfd.mass_properties(added_mass_kg=1.379, added_block="point")
+    assert point["polar_about_centre_kg_m2"] == pytest.approx(1.2645, rel=1e-6)
 
 
 def test_slab_lumping_is_exact_for_mass_and_polar_moment():

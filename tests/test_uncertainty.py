@@ -141,8 +141,9 @@ def test_updating_run_reports_linearized_columns(tmp_path):
     from framework.study.config import validate
     from framework.study.runner import run_study
 
-    cfg = validate({"study": "uq", "structure": {"name": "lab_frame_3dof"},
-                    "measured": {"builtin": "lab_frame", "case": "base"},
+    # torsion in sensor units (congruence "model"), the reading this test was written for
+    cfg = validate({"study": "uq", "structure": {"name": "lab_frame_3dof", "options": {"congruence": "model"}},
+                    "measured": {"builtin": "lab_frame", "case": "base", "options": {"congruence": "model"}},
                     "budget": {"max_evaluations": 2000},
                     "algorithms": {"sm": {"algorithm": "sm", "settings": {"start": "initial"}}},
                     "runs": 1, "output": str(tmp_path / "uq")})

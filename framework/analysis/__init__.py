@@ -36,6 +36,8 @@ ANALYSES: dict[str, str] = {
     "updating_summary": "framework.analysis.updating_summary",
     "choices": "framework.analysis.choices",
     "damage_summary": "framework.analysis.damage_summary",
+    "congruence": "framework.analysis.congruence",
+    "timing": "framework.analysis.timing",
 }
 
 

@@ -15,7 +15,7 @@ with ``runs: 10`` diagnoses ten independent data sets. The schema of the whole c
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import Discriminator, Field, StrictInt, Tag, model_validator
 
@@ -63,6 +63,8 @@ class MeasuredSource(Strict):
     file: str | None = None
     builtin: str | None = None
     case: str = "base"
+    #: keywords for a built-in data set's provider (e.g. the lab frame's ``congruence``)
+    options: dict[str, Any] = Field(default_factory=dict)
     generate: GenerateConfig | None = None
 
     @model_validator(mode="after")
@@ -116,7 +118,7 @@ def measured_of(measured: dict, catalogue: Catalogue, run_seed: int = 0) -> Meas
     if measured.get("builtin") is not None:
         from framework.models.registry import builtin_measured
 
-        return builtin_measured(measured["builtin"], measured.get("case", "base"))
+        return builtin_measured(measured["builtin"], measured.get("case", "base"), **(measured.get("options") or {}))
     gen = measured["generate"]
     for effect in gen.get("hidden", {}):
         catalogue.effect(effect)  # names an unknown effect

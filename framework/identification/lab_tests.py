@@ -66,7 +66,7 @@ def pull_system(theta: Mapping[str, float] | None = None) -> ModalSystem:
 
 def true_modes(theta: Mapping[str, float] | None = None):
     """(f_hz, zeta, shapes at [y, x, torsion]) of the true frame."""
-    res = lf.make_model().modal(dict(TRUE_THETA if theta is None else theta))
+    res = lf.make_model(congruence="model").modal(dict(TRUE_THETA if theta is None else theta))
     return res.frequencies_hz, np.array(DAMPING_RATIO), res.shapes
 
 

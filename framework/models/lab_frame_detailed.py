@@ -54,17 +54,22 @@ Choices the SPEC leaves open (documented here, all changeable by options)
       :func:`nonstructural_masses` so that the whole model has M = 17.5 kg,
       sum m x = M xcm, sum m y = M ycm and sum m (x^2 + y^2) = J = 1.2645 kg m^2 about
       the slab centre (the column mass counted at the column axes); the most even
-      non-negative solution is taken. Added (validation) masses are one nodal mass at the
-      slab centre node, as in the 3-DOF model.
+      non-negative solution is taken. Added (validation) masses are a rigid block at the
+      slab centre node, as in the 3-DOF model: its mass on the translations and its own
+      moments of inertia on the rotations (our assumption: a compact steel cylinder with
+      h = d, :func:`framework.models.lab_frame.block_dimensions`; its centroid's height
+      h/2 above the slab is neglected); ``added_block="point"`` drops the rotational part.
     * Measured DOFs: the slab centre node, "y" = u_y, "x" = u_x and
-      "torsion" = r_z * b / 2 (b = 0.65 m), the 3-DOF model's labels and convention.
+      "torsion" = r_z times the 3-DOF model's congruence factor (``congruence``, default
+      "measured": r_z itself, compared with the published column divided by b/2).
       The model returns the three lowest modes only (``n_modes=3``): they are the two
       sways and the torsion for any stiffness within the bounds (the next modes are local
       slab modes above 20 Hz), and on three DOFs a local mode can have MAC ~0.99 with the
       x sway (tiny but x-like centre motion), so MAC pairing must not see it.
     * No gravity (P-delta) analysis: P / L = 17.5 * 9.81 / 0.7 = 245 N/m is ~3 % of the
       frame's stiffness in y; neglected, as in the 3-DOF model.
-    * Rotational DOFs carry no mass (point masses and lumped element masses only).
+    * Rotational DOFs carry no mass (point masses and lumped element masses only), except
+      the centre node's with an added block.
 
 Updating parameters: the six bracket stiffnesses (same value for all eight brackets),
 default bounds 0.05x to 2x the initial values except k_r2 (0.1x to 2x) and k_r3 (0.01x to
@@ -83,12 +88,16 @@ from scipy import optimize
 
 from framework.errors import InputError
 from framework.models.lab_frame import (
+    ADDED_BLOCKS,
     CASES,
+    DEFAULT_CONGRUENCE,
     MASS_KG,
     POLAR_INERTIA_KG_M2,
     SLAB_WIDTH_M,
     XCM_M,
     YCM_M,
+    block_dimensions,
+    congruence_factors,
 )
 from framework.models.lab_frame import measured as _measured_3dof
 from framework.models.opensees import OpenSeesModel, ops_module
@@ -275,6 +284,7 @@ def build(
     values: Mapping[str, float],
     *,
     added_mass_kg: float = 0.0,
+    added_block: str = "cylinder",
     mesh: int = 4,
     column_elements: int = 6,
     nonstructural_nodes_m: Sequence[tuple[float, float]] = NONSTRUCTURAL_NODES_M,
@@ -372,10 +382,16 @@ def build(
     centre = _node_at(0.0, 0.0, mesh)
     if added_mass_kg < 0:
         raise InputError(f"lab_frame_detailed: added_mass_kg must be >= 0, got {added_mass_kg!r}")
+    if added_block not in ADDED_BLOCKS:
+        raise InputError(f"lab_frame_detailed: unknown added_block {added_block!r}; known: {list(ADDED_BLOCKS)}")
     if added_mass_kg > 0:
         point_masses[centre] = point_masses.get(centre, 0.0) + float(added_mass_kg)
+    rotary = {}
+    if added_mass_kg > 0 and added_block == "cylinder":
+        block = block_dimensions(float(added_mass_kg))
+        rotary[centre] = (block["rocking_inertia_kg_m2"],) * 2 + (block["polar_inertia_kg_m2"],)
     for tag, m in point_masses.items():
-        ops.mass(tag, m, m, m, 0.0, 0.0, 0.0)
+        ops.mass(tag, m, m, m, *rotary.get(tag, (0.0, 0.0, 0.0)))
     log.debug("lab_frame_detailed: %d point masses, %.4f kg", len(point_masses), sum(point_masses.values()))
 
     return {
@@ -391,6 +407,8 @@ def make_model(
     added_mass_kg: float = 0.0,
     *,
     case: str | None = None,
+    added_block: str = "cylinder",
+    congruence: str = DEFAULT_CONGRUENCE,
     n_modes: int = 3,
     mesh: int = 4,
     column_elements: int = 6,
@@ -399,7 +417,8 @@ def make_model(
     solver: str = "scipy",
 ) -> OpenSeesModel:
     """The detailed frame as an OpenSeesModel; ``case`` (a key of the 3-DOF model's CASES)
-    sets the added mass at the slab centre. The six bracket-spring stiffnesses enter K
+    sets the added mass at the slab centre (``added_block``: "cylinder" or "point"),
+    ``congruence`` the torsion reading (3-DOF model's CONGRUENCES). The six bracket-spring stiffnesses enter K
     linearly and not M (``linear_parameters``: K and M are assembled once per process)."""
     if case is not None:
         if case not in CASES:
@@ -407,10 +426,12 @@ def make_model(
         added_mass_kg = CASES[case]
     parameters = PARAMETERS.with_bounds(bounds) if bounds else PARAMETERS
     centre = _node_at(0.0, 0.0, mesh)
+    torsion_factor = congruence_factors(congruence)[0]
     return OpenSeesModel(
         build=functools.partial(
             build,
             added_mass_kg=float(added_mass_kg),
+            added_block=added_block,
             mesh=int(mesh),
             column_elements=int(column_elements),
             column_inset_m=float(column_inset_m),
@@ -420,14 +441,14 @@ def make_model(
         n_modes=int(n_modes),
         solver=solver,
         linear_parameters=tuple(PARAMETERS.names) if solver == "scipy" else (),
-        dof_scale={"torsion": SLAB_WIDTH_M / 2},
+        dof_scale={"torsion": torsion_factor},
         name=f"lab_frame_detailed(+{float(added_mass_kg):g} kg)",
     )
 
 
-def measured(case: str = "base"):
+def measured(case: str = "base", congruence: str = DEFAULT_CONGRUENCE):
     """Measured modes of the lab frame (the 3-DOF module's data, same DOF labels)."""
-    return _measured_3dof(case)
+    return _measured_3dof(case, congruence)
 
 
 def mass_properties(added_mass_kg: float = 0.0, **build_options) -> dict[str, float]:

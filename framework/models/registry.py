@@ -85,14 +85,19 @@ def make_structure(name: str, **options):
         raise InputError(f"structure {name!r}: building the model failed: {type(exc).__name__}: {exc}") from None
 
 
-def builtin_measured(name: str, case: str = "base"):
-    """Measured data set ``name`` (built-in name or 'module:function') for ``case``."""
+def builtin_measured(name: str, case: str = "base", **options):
+    """Measured data set ``name`` (built-in name or 'module:function') for ``case``;
+    ``options`` go to the provider as keywords (e.g. the lab frame's ``congruence``)."""
     if name not in MEASUREMENTS and ":" not in name:
         raise InputError(f"measured.builtin={name!r} unknown; known: {sorted(MEASUREMENTS)}")
     provider = resolve(MEASUREMENTS.get(name, name), f"measured.builtin={name!r}")
     try:
-        return provider(case)
+        return provider(case, **options)
     except InputError:
         raise
+    except TypeError as exc:
+        if options:
+            raise InputError(f"measured.builtin={name!r}: bad options {sorted(options)}: {exc}") from None
+        raise InputError(f"measured.builtin={name!r}: case {case!r}: {type(exc).__name__}: {exc}") from None
     except Exception as exc:
         raise InputError(f"measured.builtin={name!r}: case {case!r}: {type(exc).__name__}: {exc}") from None

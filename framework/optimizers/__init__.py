@@ -52,16 +52,18 @@ def run_optimizer(
     *,
     runner=None,
     progress: Callable[[int], object] | None = None,
+    pointwise: bool = False,
     **settings,
 ) -> OptimizerResult:
     """Run optimizer ``name`` on ``problem`` from ``seed`` within ``budget``.
 
     runner: how the model is evaluated (``runner(model, thetas) -> list``; serial when
-    None); progress: called with the number of new model evaluations.
+    None); progress: called with the number of new model evaluations; pointwise: evaluate
+    a population one point per call (same numbers, no vectorization).
     """
     module = _module(name)
     budget = budget or Budget()
-    evaluator = Evaluator(problem, budget.max_evaluations, runner=runner, progress=progress)
+    evaluator = Evaluator(problem, budget.max_evaluations, runner=runner, progress=progress, pointwise=pointwise)
     start = time.perf_counter()
     outcome = module.run(evaluator, seed, budget, **settings)
     return build_result(name, evaluator, seed, outcome, time.perf_counter() - start)

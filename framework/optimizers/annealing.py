@@ -14,7 +14,10 @@ dual_annealing has other knobs; the mapping used here:
   SA: T decays like t^-(qv-1)). Acceptance: scipy's generalized Metropolis with
   ``accept`` (qa = -5, the closest allowed to Boltzmann's qa -> 1 limit is not available).
 - ``local_search``: dual_annealing's L-BFGS-B polish of each new minimum (scipy default,
-  on here: pure SA spends many more evaluations to reach 1e-4). Set false for pure SA.
+  on here: pure SA spends many more evaluations to reach 1e-4). Set false for pure SA: the
+  source's SiA has no local search, so its replication studies (studies/lab_frame.yaml,
+  selection_annealing.yaml, lab_frame_timing.yaml) set false, and the hybrid with local
+  search is the variant labelled "annealing_local_search (ours)".
 
 Termination: dual_annealing reports only each new best point (its callback), not its
 iterations, so of the shared rule only the target applies (through the callback), plus

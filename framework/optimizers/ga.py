@@ -8,11 +8,25 @@ crossover fraction 0.7, mutation rate 0.01, elitism. Mapping to pymoo:
   (the default scaling of the GA the source used; pymoo has no roulette operator, so it is
   written here);
 - crossover "single_point" / "two_point" / "scattered" (uniform): pymoo point / uniform
-  crossover, applied to a mating with probability ``crossover_fraction``;
+  crossover (of the two children of a mating the first is kept, as the toolbox makes one
+  child per pair);
 - mutation: each gene is reset to a uniform random value in its bounds with probability
   ``mutation_rate`` (uniform mutation; pymoo has none for real variables, so it is written
   here);
-- elitism: pymoo's GA survival keeps the best ``pop_size`` of parents and offspring.
+- ``scheme: toolbox`` (default, the meaning of the source's GA toolbox): each generation
+  is ``elite_count`` elite children (the best parents, copied), then of the remaining
+  n_r = pop_size - elite_count children round(crossover_fraction n_r) by crossover of two
+  selected parents and the rest by mutation of one selected parent (crossover children are
+  not mutated); the children replace the parents (generational). With pop_size 20,
+  elite_count 2, fraction 0.7: 2 elite, 13 crossover, 5 mutation children, 18 evaluations
+  per generation. Assumed toolbox defaults (our assumption, the source names none):
+  ``elite_count`` = 2 (the toolbox's default before R2014; later ceil(0.05 pop_size) = 1),
+  uniform mutation with the rate as per-gene probability, no duplicate elimination.
+  pymoo has no such split, so the mating and the replacement are written here
+  (:class:`FractionMating`, :class:`ElitistReplacement`) around pymoo's operators;
+- ``scheme: pymoo`` (ours, the earlier behaviour): crossover applied to a mating with
+  probability ``crossover_fraction``, every child mutated, duplicates eliminated, pymoo's
+  survival keeps the best ``pop_size`` of parents and offspring.
 
 The run's generator is pymoo's own ``default_rng(seed)``.
 """
@@ -34,6 +48,17 @@ class GASettings(Settings):
     crossover: Literal["single_point", "two_point", "scattered"] = "two_point"
     crossover_fraction: float = Field(0.7, ge=0, le=1)
     mutation_rate: float = Field(0.01, ge=0, le=1)
+    scheme: Literal["toolbox", "pymoo"] = "toolbox"
+    elite_count: int = Field(2, ge=0)
+
+
+def children_split(pop_size: int, elite_count: int, crossover_fraction: float) -> dict[str, int]:
+    """Children per generation in the toolbox scheme: elite, then round(fraction n_r) by
+    crossover of the remaining n_r = pop_size - elite, the rest by mutation."""
+    elite = min(elite_count, pop_size)
+    rest = pop_size - elite
+    crossover = int(round(crossover_fraction * rest))
+    return {"elite": elite, "crossover": crossover, "mutation": rest - crossover}
 
 
 def _operators(s: GASettings):
@@ -63,13 +88,14 @@ def _operators(s: GASettings):
             return random_state.choice(len(F), size=(n_select, n_parents), p=p)
 
     mutation = UniformResetMutation(prob=1.0)
+    mutation.uniform_reset = True
     mutation.rate = s.mutation_rate
     crossover_cls = {
         "single_point": SinglePointCrossover,
         "two_point": TwoPointCrossover,
         "scattered": UniformCrossover,
     }[s.crossover]
-    crossover = crossover_cls(prob=s.crossover_fraction)
+    crossover = crossover_cls(prob=s.crossover_fraction if s.scheme == "pymoo" else 1.0)
     if s.selection == "roulette":
         selection = RankRouletteSelection()
     else:
@@ -80,6 +106,52 @@ def _operators(s: GASettings):
     return selection, crossover, mutation
 
 
+def _toolbox_parts(s: GASettings, selection, crossover, mutation):
+    """The toolbox generation as a pymoo mating (children) and survival (replacement)."""
+    from pymoo.core.infill import InfillCriterion
+    from pymoo.core.population import Population
+    from pymoo.core.survival import Survival
+
+    split = children_split(s.pop_size, s.elite_count, s.crossover_fraction)
+
+    class FractionMating(InfillCriterion):
+        """n_crossover children from pairs (first child of each pair), n_mutation mutated
+        copies of single parents; ``last_split`` records the counts of the last call."""
+
+        last_split: dict[str, int] = {}
+
+        def _do(self, problem, pop, n_offsprings, random_state=None, **kwargs):
+            n_x = min(split["crossover"], n_offsprings)
+            n_m = n_offsprings - n_x
+            parts = []
+            if n_x:
+                pairs = selection(problem, pop, n_x, n_parents=2, random_state=random_state, **kwargs)
+                kids = crossover(problem, pairs, random_state=random_state, **kwargs)
+                parts.append(kids[:n_x])  # rows: first child of every pair, then the second ones
+            if n_m:
+                single = selection(problem, pop, n_m, n_parents=1, random_state=random_state, **kwargs)
+                X = np.array([row[0].get("X") for row in single], dtype=float)
+                parts.append(Population.new(X=mutation._do(problem, X, random_state=random_state)))
+            self.last_split = {"elite": split["elite"], "crossover": n_x, "mutation": n_m}
+            return Population.merge(*parts) if len(parts) > 1 else parts[0]
+
+    class ElitistReplacement(Survival):
+        """Next generation = the ``elite`` best parents + all children."""
+
+        def __init__(self):
+            super().__init__(filter_infeasible=False)
+
+        def _do(self, problem, pop, *args, n_survive=None, algorithm=None, **kwargs):
+            n_children = split["crossover"] + split["mutation"]
+            if len(pop) <= n_survive or algorithm is None or algorithm.n_gen is None or len(pop) < n_children:
+                return pop[np.argsort(pop.get("F")[:, 0], kind="stable")[:n_survive]]
+            parents, children = pop[: len(pop) - n_children], pop[len(pop) - n_children:]
+            elite = parents[np.argsort(parents.get("F")[:, 0], kind="stable")[: split["elite"]]]
+            return Population.merge(elite, children)
+
+    return FractionMating(), ElitistReplacement(), split
+
+
 def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     from pymoo.algorithms.soo.nonconvex.ga import GA
     from pymoo.operators.sampling.rnd import FloatRandomSampling
@@ -87,20 +159,33 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
 
     s = GASettings(**settings)
     selection, crossover, mutation = _operators(s)
-    algorithm = GA(
-        pop_size=s.pop_size,
-        sampling=FloatRandomSampling(),
-        selection=selection,
-        crossover=crossover,
-        mutation=mutation,
-        eliminate_duplicates=True,
-    )
+    if s.scheme == "toolbox":
+        mating, survival, split = _toolbox_parts(s, selection, crossover, mutation)
+        n_children = split["crossover"] + split["mutation"]
+        algorithm = GA(
+            pop_size=s.pop_size,
+            sampling=FloatRandomSampling(),
+            mating=mating,
+            survival=survival,
+            n_offsprings=n_children,
+            eliminate_duplicates=False,
+        )
+    else:
+        n_children = s.pop_size
+        algorithm = GA(
+            pop_size=s.pop_size,
+            sampling=FloatRandomSampling(),
+            selection=selection,
+            crossover=crossover,
+            mutation=mutation,
+            eliminate_duplicates=True,
+        )
     termination = Termination(budget, evaluator)
     algorithm.setup(
         pymoo_problem(evaluator), termination=MaximumGenerationTermination(10**9), seed=seed, verbose=False
     )
     generation = 0
-    while termination.affords(s.pop_size):
+    while termination.affords(max(n_children, 1) if generation else s.pop_size):
         algorithm.next()
         generation += 1
         # best so far over successful evaluations (= the elitist population's best without failures)
@@ -109,5 +194,6 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     return Outcome(
         termination.status,
         generation,
-        extra={"pop_size": s.pop_size, "selection": s.selection, "crossover": s.crossover},
+        extra={"pop_size": s.pop_size, "selection": s.selection, "crossover": s.crossover,
+               "scheme": s.scheme, "elite_count": s.elite_count if s.scheme == "toolbox" else None},
     )

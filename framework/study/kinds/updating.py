@@ -64,6 +64,8 @@ class MeasuredConfig(Strict):
 
     builtin: str | None = None
     case: str = "base"
+    #: keywords for a built-in data set's provider (e.g. the lab frame's ``congruence``)
+    options: dict[str, Any] = Field(default_factory=dict)
     file: str | None = None
     #: for a UFF file (.unv/.uff): the mapping file from test node + direction to model DOF
     mapping: str | None = None
@@ -125,6 +127,9 @@ class AlgorithmConfig(Strict):
     settings: dict[str, Any] = Field(default_factory=dict)
     runs: StrictInt | None = Field(None, ge=1, le=100_000)
     budget: dict[str, Any] = Field(default_factory=dict)
+    #: "pointwise": a population is evaluated one point per call (as the source's toolboxes;
+    #: for timing), "batch": in one vectorized call where the model allows it (default)
+    evaluation: Literal["batch", "pointwise"] = "batch"
 
     @field_validator("algorithm")
     @classmethod
@@ -220,6 +225,10 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
     data = cfg.model_dump(mode="json")
     common = {k: data[k] for k in ("structure", "measured", "validation", "parameters", "objective")}
     common["objective"] = effective_objective(common["objective"])
+    # empty measured options are left out, so runs stored before the field existed keep their ids
+    _drop_empty_options(common["measured"])
+    for case in common["validation"] or []:
+        _drop_empty_options(case.get("measured"))
     parts = []
     for label, alg in cfg.algorithms.items():
         settings = settings_model(alg.algorithm).model_validate(alg.settings).model_dump(mode="json")
@@ -227,6 +236,8 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
         relevant = [k for k in sweep_values if not k.startswith("algorithms.") or k.startswith(f"algorithms.{label}.")]
         task = {**common, "algorithm": alg.algorithm, "settings": settings, "budget": budget,
                 "execution": data["execution"]}
+        if alg.evaluation != "batch":  # only when set: the ids of earlier runs stay
+            task["evaluation"] = alg.evaluation
         columns = {"structure": cfg.structure.name, "algorithm": alg.algorithm}
         for i in range(alg.runs or cfg.runs):
             parts.append({"label": label, "seed": cfg.seed + i, "task": task, "columns": columns,
@@ -273,7 +284,7 @@ def measured_from(cfg: dict) -> MeasuredModes:
     if cfg.get("file"):
         m = load_measured(cfg["file"], cfg.get("mapping"))
     else:
-        m = builtin_measured(cfg["builtin"], cfg.get("case", "base"))
+        m = builtin_measured(cfg["builtin"], cfg.get("case", "base"), **(cfg.get("options") or {}))
     if cfg.get("modes"):
         m = m.select_modes(cfg["modes"], where=f"{m.source}: measured.modes")
     return m
@@ -392,13 +403,19 @@ def run(spec: dict) -> dict[str, list[dict]]:
         close()
 
 
+def _drop_empty_options(measured: dict | None) -> None:
+    if isinstance(measured, dict) and not measured.get("options"):
+        measured.pop("options", None)
+
+
 def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
     problem = build_problem(task)
     bar = _evaluation_bar(spec)
     try:
         result = run_optimizer(task["algorithm"], problem, spec["seed"], Budget(**task["budget"]), runner=runner,
-                               progress=bar.update if bar is not None else None, **task["settings"])
+                               progress=bar.update if bar is not None else None,
+                               pointwise=task.get("evaluation") == "pointwise", **task["settings"])
     finally:
         if bar is not None:
             bar.close()

@@ -1,0 +1,41 @@
+"""The reproduction report (docs/reproduction.md) is what the committed tables give."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from framework.analysis import reproduction
+from framework.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_docs_reproduction_is_up_to_date_with_the_committed_tables():
+    expected = reproduction.render(reproduction.collect(ROOT / "results"))
+    text = (ROOT / "docs" / "reproduction.md").read_text(encoding="utf-8")
+    assert text == expected, "docs/reproduction.md is stale: gomu report --reproduction results --output docs/reproduction.md"
+
+
+def test_every_row_has_the_report_columns_and_lab_and_bridge_are_there():
+    rows = reproduction.collect(ROOT / "results")
+    assert all(tuple(r) == reproduction.COLUMNS for r in rows)
+    studies = {r["study"] for r in rows}
+    assert any("Laboratory frame" in s for s in studies) and any("footbridge" in s for s in studies)
+    # the congruence rows: exactly one reading is the default
+    cong = [r for r in rows if r["item"].startswith("torsion congruence")]
+    assert len(cong) == 4 and sum("the default" in r["choice"] for r in cong) == 1
+
+
+def test_missing_tables_give_not_run_rows(tmp_path):
+    rows = reproduction.collect(tmp_path)
+    assert rows and all(r["verdict"] == "not run" for r in rows if r["ours"].startswith("(no table"))
+    assert any(r["ours"] == "(no table results/lab_frame_timing/timing.csv)" for r in rows)
+
+
+def test_cli_writes_the_report_and_refuses_a_missing_folder(tmp_path, capsys):
+    out = tmp_path / "r.md"
+    assert main(["report", "--reproduction", str(ROOT / "results"), "--output", str(out)]) == 0
+    assert out.read_text(encoding="utf-8") == (ROOT / "docs" / "reproduction.md").read_text(encoding="utf-8")
+    assert main(["report", "--reproduction", str(tmp_path / "nowhere")]) == 2
+    err = capsys.readouterr().err
+    assert "results folder" in err and "nowhere" in err and "Traceback" not in err
