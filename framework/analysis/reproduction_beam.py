@@ -110,7 +110,7 @@ def rows(results_dir: Path) -> list[dict]:
         "verdict": "reproduced within 0.05 %" if max(err[(s, lab)] for s, lab in TRUTH_POINTS.items()) < 0.05
         else "not reproduced within 0.05 %",
     })
-    budget = "PSO swarm 20 up to 50 000 evaluations per update, 20 noise seeds, shape noise a = 0/1/3 %"
+    budget = "PSO swarm 20 up to 50 000 evaluations per update, 20 noise seeds, shape noise a = 3 % (SPEC 7)"
     out.append({
         "study": STUDY, "item": "SOO (baseline difference)",
         "source": f"update the intact state (baseline), then each damaged state; severity = difference of the "
