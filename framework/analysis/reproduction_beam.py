@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from framework.errors import InputError
+from framework.analysis.reproduction import missing
 
 STUDY = "beam damage (SPEC 7)"
 #: the 20-element truth's candidates of results/beam_truth (points of studies/beam_truth.yaml)
@@ -24,10 +24,11 @@ SOURCE_FREQUENCIES = {"state1": "12.83, 51.78, 115.99, 206.04, 323.64 Hz",
                       "state2": "12.64, 51.07, 115.04, 204.71, 320.15 Hz"}
 
 
-def _read(path: Path) -> pd.DataFrame:
-    if not path.is_file():
-        raise InputError(f"reproduction (beam): table not found: {path}; run the study first")
-    return pd.read_csv(path)
+#: the tables the rows need (relative to the results folder)
+TABLES = ("beam_truth/modes.csv", "beam_damage/comparison.csv", "beam_damage/lcurve_choice.csv",
+          "beam_damage/damage_indices.csv", "beam_damage/lcurve.csv")
+ITEMS = ("frequencies (truth)", "SOO (baseline difference)", "SOO independent updates (ours)", "MOO (NSGA-II)",
+         "regularized (PSO + Tikhonov)", "L-curve", "damage indices")
 
 
 def _errors(cmp: pd.DataFrame, method: str) -> str:
@@ -88,12 +89,10 @@ def _change(cmp: pd.DataFrame) -> str:
 
 def rows(results_dir: Path) -> list[dict]:
     results_dir = Path(results_dir)
-    modes = _read(results_dir / "beam_truth" / "modes.csv")
-    damage_dir = results_dir / "beam_damage"
-    cmp = _read(damage_dir / "comparison.csv")
-    choice = _read(damage_dir / "lcurve_choice.csv")
-    di = _read(damage_dir / "damage_indices.csv")
-    lcurve = _read(damage_dir / "lcurve.csv")
+    absent = [t for t in TABLES if not (results_dir / t).is_file()]
+    if absent:  # a study not run: one "not run" row per item
+        return [missing(STUDY, item, "", absent[0]) for item in ITEMS]
+    modes, cmp, choice, di, lcurve = (pd.read_csv(results_dir / t) for t in TABLES)
     out: list[dict] = []
 
     # frequencies of the 20-element truth
