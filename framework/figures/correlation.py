@@ -69,8 +69,11 @@ def mac_figure(mac: pd.DataFrame, path: Path) -> Path | None:
     width = [max(4.0, 0.45 * d["j"].clip(upper=MAX_MODES).max() + 2.5) for *_, d in panels]
     fig, axes = plt.subplots(1, len(panels), figsize=(sum(width), 4.8), squeeze=False,
                              gridspec_kw={"width_ratios": width, "wspace": 0.45})
-    for ax, (title, xl, yl, d) in zip(axes.ravel(), panels):
+    for k, (ax, (title, xl, yl, d)) in enumerate(zip(axes.ravel(), panels)):
         im = _heatmap(ax, d, title, xl, yl)
+        if k:  # every panel's rows are the measured modes: label them once, on the left
+            ax.set_ylabel("")
+            ax.tick_params(labelleft=False)
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="MAC")
     return _save(fig, path)
 
