@@ -112,8 +112,10 @@ def test_committed_updated_point_is_the_sm_result_of_the_cable_study():
     ratios = cfg.points["updated"].ratios
     params = pd.read_csv(ROOT / "results" / "bridge" / "cables" / "parameters.csv")
     sm4 = params[params["cable_elements"] == 4].set_index("parameter")["ratio"]
+    # a regenerated cable study lands within ~1e-9 of the stored point: OpenSees' eigen solver
+    # keeps state between calls in a process, so SM's last digits depend on what ran before
     for name in NAMES:
-        assert ratios[name] == pytest.approx(sm4[name], rel=1e-12), name
+        assert ratios[name] == pytest.approx(sm4[name], rel=1e-8), name
 
 
 def test_bridge_analysis_gives_the_same_tables_on_dask_and_after_resume(tmp_path):

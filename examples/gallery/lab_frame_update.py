@@ -12,7 +12,7 @@ from framework.problem import UpdatingProblem
 
 def main() -> dict:
     problem = UpdatingProblem(make_model(), measured("base"))
-    result = run_optimizer("sm", problem, seed=0, budget=Budget(max_evaluations=400), start="initial")
+    result = run_optimizer("sm", problem, seed=0, budget=Budget(max_evaluations=1000), start="initial")
     ratios = problem.parameters.to_ratio(result.theta_best)
     for p, value, ratio in zip(problem.parameters, result.theta_best, ratios):
         relative = f"({ratio:.3f} x initial)" if ratio == ratio else "(initial 0)"  # NaN: no ratio to 0
