@@ -280,6 +280,20 @@ def spec_residuals(result: ModalResult, measured: MeasuredModes, spec: Objective
     return np.concatenate([r_f, r_s]), corr
 
 
+def pair_population(freqs: np.ndarray, shapes: np.ndarray | None, measured: MeasuredModes, spec: ObjectiveSpec,
+                    use_shapes: bool):
+    """Pair a population's modes with the measured ones as the objective does: by MAC (the
+    spec's pairing rule) when shapes are used, else by order or frequency. Returns
+    ``pair_modes_batch``'s (index, mac, matched) arrays, or None when the population is too
+    large to pair by enumeration."""
+    from framework.correlation import mac_matrix_batch, pair_modes_batch
+
+    mm = mac_matrix_batch(shapes, measured.shapes) if use_shapes else None
+    method = spec.pairing if use_shapes else ("order" if spec.pairing == "order" else "frequency")
+    return pair_modes_batch(freqs, measured.frequencies_hz, mm, mac_threshold=spec.mac_threshold,
+                            frequency_window=spec.frequency_window, method=method)
+
+
 def spec_residuals_batch(freqs: np.ndarray, shapes: np.ndarray, measured: MeasuredModes, spec: ObjectiveSpec):
     """Vectorized :func:`spec_residuals` for a population with equal mode counts.
 
@@ -288,13 +302,8 @@ def spec_residuals_batch(freqs: np.ndarray, shapes: np.ndarray, measured: Measur
     None if the population is too large to pair by enumeration (the caller then uses the
     per-point path).
     """
-    from framework.correlation import mac_matrix_batch, pair_modes_batch
-
     use_shapes = spec.use_shapes and measured.has_shapes
-    mm = mac_matrix_batch(shapes, measured.shapes) if use_shapes else None
-    method = spec.pairing if use_shapes else ("order" if spec.pairing == "order" else "frequency")
-    paired = pair_modes_batch(freqs, measured.frequencies_hz, mm, mac_threshold=spec.mac_threshold,
-                              frequency_window=spec.frequency_window, method=method)
+    paired = pair_population(freqs, shapes, measured, spec, use_shapes)
     if paired is None:
         return None
     idx, mac, matched = paired

@@ -3,7 +3,7 @@
 :mod:`framework.discrepancy.likelihood` evaluates its whitened residuals point by point (mode
 pairing and the fitted shape scale per point), which costs ~10x the model solve of the
 vectorized models and dominates a sampler's time. This module computes the same residuals for
-n points at once, with the population pairing of :func:`framework.correlation.pair_modes_batch`
+n points at once, with the population pairing of :func:`framework.objectives.pair_population`
 (exact enumeration, as the SPEC formulation's batch path does):
 
     r_f,j = (f_a,j - f_e,j) / sigma_f,j,   r_s,kj = (c_j a_kj - e_kj) / s_kj,   c_j = a'We / a'Wa,
@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from framework.correlation import mac_matrix_batch, pair_modes_batch
 from framework.models.arrays import ModalArrays, array_method
 from framework.models.base import ModalResult, modal_many
+from framework.objectives import pair_population
 
 
 def _modes(problem, theta: np.ndarray, runner):
@@ -69,10 +69,7 @@ def gaussian_residuals_batch(problem, X: np.ndarray, runner=None) -> np.ndarray 
         return None
     if shape_rows and np.any(np.sum(shapes**2, axis=1) == 0):
         return None
-    mm = mac_matrix_batch(shapes, measured.shapes) if shape_rows else None
-    method = spec.pairing if shape_rows else ("order" if spec.pairing == "order" else "frequency")
-    paired = pair_modes_batch(freqs, measured.frequencies_hz, mm, mac_threshold=spec.mac_threshold,
-                              frequency_window=spec.frequency_window, method=method)
+    paired = pair_population(freqs, shapes, measured, spec, shape_rows)
     if paired is None:
         return None
     idx, _, matched = paired
