@@ -13,6 +13,7 @@ from framework.sensitivity import sensitivity_matrix
 from framework.study.config import validate
 from framework.study.plan import plan
 from framework.study.runner import run_study
+from tests.tables import assert_same_tables
 
 SMALL = {
     "study": "small_analysis",
@@ -34,12 +35,6 @@ def _run(tmp_path, name, **changes):
     cfg = validate({**SMALL, "output": str(tmp_path / name), **changes})
     run_study(cfg, figures=False)
     return {t: pd.read_csv(tmp_path / name / f"{t}.csv") for t in TABLES}
-
-
-def _assert_same(a, b):
-    for name in a:
-        pd.testing.assert_frame_equal(a[name].drop(columns=["wall_s"], errors="ignore"),
-                                      b[name].drop(columns=["wall_s"], errors="ignore"), check_exact=True)
 
 
 def test_tables_hold_points_parameters_modes_and_sensitivities(tmp_path):
@@ -111,14 +106,14 @@ def test_widened_bounds_keep_a_step_at_the_upper_bound_forward(tmp_path):
 def test_process_backend_resume_and_dask_give_the_same_tables(tmp_path):
     ref = _run(tmp_path, "serial")
     procs = _run(tmp_path, "procs", execution={"backend": "processes", "workers": 2, "progress": False})
-    _assert_same(ref, procs)
+    assert_same_tables(ref, procs)
     # remove one stored run, resume: only that run is computed again, tables identical
     parts = sorted((tmp_path / "serial" / "_runs").glob("*.json"))
     assert len(parts) == 4
     parts[1].unlink()
     cfg = validate({**SMALL, "output": str(tmp_path / "serial")})
     run_study(cfg, resume=True, figures=False)
-    _assert_same(ref, {t: pd.read_csv(tmp_path / "serial" / f"{t}.csv") for t in TABLES})
+    assert_same_tables(ref, {t: pd.read_csv(tmp_path / "serial" / f"{t}.csv") for t in TABLES})
     distributed = pytest.importorskip("distributed")
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
     try:
@@ -126,7 +121,7 @@ def test_process_backend_resume_and_dask_give_the_same_tables(tmp_path):
                                                  "progress": False})
     finally:
         cluster.close()
-    _assert_same(ref, dask)
+    assert_same_tables(ref, dask)
 
 
 def test_report_options_do_not_change_run_ids():

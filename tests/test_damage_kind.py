@@ -10,6 +10,7 @@ from framework.errors import InputError
 from framework.study.config import validate
 from framework.study.plan import plan
 from framework.study.runner import run_study
+from tests.tables import assert_same_tables
 
 TINY = {
     "study": "tiny_damage",
@@ -29,12 +30,6 @@ def _run(tmp_path, name, **changes):
     cfg = validate({**TINY, "output": str(tmp_path / name), **changes})
     run_study(cfg, figures=False)
     return {t: pd.read_csv(tmp_path / name / f"{t}.csv") for t in TABLES}
-
-
-def _assert_same(a, b):
-    for name in a:
-        pd.testing.assert_frame_equal(a[name].drop(columns=["wall_s"], errors="ignore"),
-                                      b[name].drop(columns=["wall_s"], errors="ignore"), check_exact=True)
 
 
 def test_tables_columns_and_the_baseline_difference_of_the_source(tmp_path):
@@ -71,12 +66,12 @@ def test_tables_columns_and_the_baseline_difference_of_the_source(tmp_path):
 def test_process_backend_resume_and_dask_give_the_same_tables(tmp_path):
     ref = _run(tmp_path, "serial")
     procs = _run(tmp_path, "procs", execution={"backend": "processes", "workers": 2, "progress": False})
-    _assert_same(ref, procs)
+    assert_same_tables(ref, procs)
     parts = sorted((tmp_path / "serial" / "_runs").glob("*.json"))
     assert len(parts) == 3
     parts[0].unlink()
     run_study(validate({**TINY, "output": str(tmp_path / "serial")}), resume=True, figures=False)
-    _assert_same(ref, {t: pd.read_csv(tmp_path / "serial" / f"{t}.csv") for t in TABLES})
+    assert_same_tables(ref, {t: pd.read_csv(tmp_path / "serial" / f"{t}.csv") for t in TABLES})
     distributed = pytest.importorskip("distributed")
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
     try:
@@ -84,7 +79,7 @@ def test_process_backend_resume_and_dask_give_the_same_tables(tmp_path):
                                                  "progress": False})
     finally:
         cluster.close()
-    _assert_same(ref, dask)
+    assert_same_tables(ref, dask)
 
 
 def test_report_options_keep_run_ids_and_settings_change_only_their_runs():

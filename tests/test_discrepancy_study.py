@@ -17,6 +17,7 @@ from framework.study.config import load, validate
 from framework.study.plan import plan
 from framework.study.runner import preflight, report, run_study
 from framework.study.store import ResultStore
+from tests.tables import assert_same_tables
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -34,18 +35,10 @@ SMALL = {
     "execution": {"progress": False},
 }
 TABLES = ("summary", "rounds", "candidates", "modes", "parameters", "comac", "cases", "rates")
-TIMING = {"wall_s"}
 
 
 def _tables(root: Path) -> dict[str, pd.DataFrame]:
     return {n: pd.read_csv(root / f"{n}.csv") for n in TABLES}
-
-
-def _assert_same(a: dict, b: dict) -> None:
-    for name in a:
-        x = a[name].drop(columns=[c for c in TIMING if c in a[name]])
-        y = b[name].drop(columns=[c for c in TIMING if c in b[name]])
-        pd.testing.assert_frame_equal(x, y, check_exact=True, obj=name)
 
 
 @pytest.fixture(scope="module")
@@ -99,16 +92,16 @@ def test_resume_processes_and_report_reproduce_the_serial_tables(small_study, tm
     kept = parts[1].read_text()
     run_study(cfg, resume=True)
     assert parts[1].read_text() == kept  # the stored run was not redone
-    _assert_same(ref, _tables(resumed))
+    assert_same_tables(ref, _tables(resumed))
     # on worker processes
     procs = tmp_path / "processes"
     run_study(validate(dict(SMALL, output=str(procs))), backend="processes", workers=2)
-    _assert_same(ref, _tables(procs))
+    assert_same_tables(ref, _tables(procs))
     # gomu report redoes the analyses and figures from the stored tables
     (procs / "cases.csv").unlink()
     (procs / "study.png").unlink()
     report(procs)
-    _assert_same({"cases": ref["cases"]}, {"cases": pd.read_csv(procs / "cases.csv")})
+    assert_same_tables({"cases": ref["cases"]}, {"cases": pd.read_csv(procs / "cases.csv")})
     assert (procs / "study.png").exists()
 
 
@@ -122,7 +115,7 @@ def test_dask_reproduces_the_serial_tables(small_study, tmp_path):
         run_study(cfg)
     finally:
         cluster.close()
-    _assert_same(_tables(small_study), _tables(tmp_path / "d"))
+    assert_same_tables(_tables(small_study), _tables(tmp_path / "d"))
 
 
 def test_plan_magnitude_once_without_effect_parameters_and_report_keeps_run_ids():

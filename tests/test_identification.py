@@ -29,6 +29,7 @@ from framework.identification.subspace import (
 )
 from framework.measurements import load as load_modes
 from framework.measurements import save as save_modes
+from tests.tables import assert_same_tables
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -434,12 +435,6 @@ def _study_tables(root):
     return {n: pd.read_csv(root / f"{n}.csv") for n in KIND_TABLES}
 
 
-def _assert_same_tables(a, b):
-    for name in a:
-        x, y = (t.drop(columns=[c for c in ("wall_s",) if c in t]) for t in (a[name], b[name]))
-        pd.testing.assert_frame_equal(x, y, check_exact=True)
-
-
 @pytest.fixture(scope="module")
 def small_study(tmp_path_factory):
     from framework.study.config import validate
@@ -504,11 +499,11 @@ def test_identification_study_resume_and_processes_give_the_same_tables(small_st
     parts = sorted((copy / "_runs").glob("*.json"))
     parts[0].unlink()
     run_study(validate(dict(SMALL, output=str(copy))), resume=True, figures=False)
-    _assert_same_tables(_study_tables(out), _study_tables(copy))
+    assert_same_tables(_study_tables(out), _study_tables(copy))
     proc = validate(dict(SMALL, output=str(tmp_path / "proc"), execution={"backend": "processes", "workers": 2,
                                                                            "progress": False}))
     run_study(proc, figures=False)
-    _assert_same_tables(_study_tables(out), _study_tables(tmp_path / "proc"))
+    assert_same_tables(_study_tables(out), _study_tables(tmp_path / "proc"))
 
 
 def test_identification_study_on_dask_gives_the_same_tables(small_study, tmp_path):
@@ -524,7 +519,7 @@ def test_identification_study_on_dask_gives_the_same_tables(small_study, tmp_pat
         run_study(cfg, figures=False)
     finally:
         cluster.close()
-    _assert_same_tables(_study_tables(out), _study_tables(tmp_path / "dask"))
+    assert_same_tables(_study_tables(out), _study_tables(tmp_path / "dask"))
 
 
 def test_report_options_and_other_methods_settings_keep_run_ids():

@@ -15,6 +15,7 @@ from framework.errors import InputError
 from framework.study.config import load, validate
 from framework.study.plan import plan
 from framework.study.runner import run_study
+from tests.tables import assert_same_tables
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -32,7 +33,6 @@ SMALL = {
 }
 
 # columns that measure time, not results
-TIMING = {"wall_s"}
 
 
 def _write(tmp_path, data, name="study.yaml"):
@@ -43,13 +43,6 @@ def _write(tmp_path, data, name="study.yaml"):
 
 def _tables(root):
     return {n: pd.read_csv(root / f"{n}.csv") for n in ("runs", "parameters", "modes", "history")}
-
-
-def _assert_same(a, b):
-    for name in a:
-        x, y = a[name].drop(columns=[c for c in TIMING if c in a[name]]), b[name].drop(
-            columns=[c for c in TIMING if c in b[name]])
-        pd.testing.assert_frame_equal(x, y, check_exact=True)
 
 
 @pytest.mark.parametrize(
@@ -103,7 +96,7 @@ def test_same_config_and_seed_give_identical_tables(tmp_path):
     run_study(a, figures=False)
     run_study(b, figures=False)
     ta, tb = _tables(tmp_path / "a"), _tables(tmp_path / "b")
-    _assert_same(ta, tb)
+    assert_same_tables(ta, tb)
     assert set(ta["modes"]["case"]) == {"base", "mass_0.654kg"}
     assert {"run_id", "label", "seed", "objective", "n_evaluations", "wall_s", "status", "error"} <= set(ta["runs"])
     assert {"parameter", "unit", "initial", "value", "ratio"} <= set(ta["parameters"])
@@ -116,7 +109,7 @@ def test_process_backend_gives_the_same_tables(tmp_path):
                                                                     "progress": False}))
     run_study(a, figures=False)
     run_study(b, figures=False)
-    _assert_same(_tables(tmp_path / "a"), _tables(tmp_path / "b"))
+    assert_same_tables(_tables(tmp_path / "a"), _tables(tmp_path / "b"))
 
 
 def test_resume_after_kill_gives_the_same_tables(tmp_path):
@@ -140,7 +133,7 @@ def test_resume_after_kill_gives_the_same_tables(tmp_path):
     assert not list((out / "_runs").glob(".*.tmp")) or True  # temp files are ignored by the store
     done = subprocess.run(cmd + ["--resume"], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    _assert_same(_tables(tmp_path / "ref"), _tables(out))
+    assert_same_tables(_tables(tmp_path / "ref"), _tables(out))
     assert len(pd.read_csv(out / "runs.csv")) == 8
 
 
@@ -181,5 +174,5 @@ def test_external_dask_scheduler_address(tmp_path):
         cluster.close()
     ref = validate(dict(SMALL, output=str(tmp_path / "s")))
     run_study(ref, figures=False)
-    _assert_same(_tables(tmp_path / "s"), _tables(tmp_path / "d"))
+    assert_same_tables(_tables(tmp_path / "s"), _tables(tmp_path / "d"))
     assert len(tables["runs"]) == 5
