@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from framework.correlation import pair_modes
-from framework.models import bridge
+from framework.core.correlation import pair_modes
+from framework.structures import bridge
 
 
 def _paired(result, measured):

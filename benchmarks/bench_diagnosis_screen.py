@@ -5,7 +5,7 @@ Usage: .venv/bin/python benchmarks/bench_diagnosis_screen.py [--seeds 1 2] [--ke
 On the three-storey two-bay frame with ``candidates: auto`` (about 80 generated variants),
 diagnoses data with a hidden effect at a random location twice: every variant calibrated
 (``screen_keep`` None) and only the ``--keep`` best variants of each effect by the
-linearized screen (:mod:`framework.discrepancy.screen`). Prints per case the model
+linearized screen (:mod:`framework.diagnosis.screen`). Prints per case the model
 evaluations of both, their ratio, and for every effect the best location of round 1 by
 each path (the same location = the screen did not lose the best fit), and the named
 effect and location of both.
@@ -16,10 +16,10 @@ from __future__ import annotations
 import argparse
 import time
 
-from framework.discrepancy.auto import with_candidates
-from framework.discrepancy.generate import NOISE_LEVELS, HiddenCase, generate
-from framework.discrepancy.workflow import DiagnoseSettings, diagnose
-from framework.models import frame_two_bay
+from framework.diagnosis.auto import with_candidates
+from framework.diagnosis.generate import NOISE_LEVELS, HiddenCase, generate
+from framework.diagnosis.workflow import DiagnoseSettings, diagnose
+from framework.structures.frame_two_bay import model as frame_two_bay
 
 CASES = ("member_stiffness_change", "added_brace", "level_mass_change", "semi_rigid_connections")
 

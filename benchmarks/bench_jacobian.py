@@ -25,10 +25,10 @@ import time
 
 import numpy as np
 
-from framework.models import smu
-from framework.objectives import ObjectiveSpec
 from framework.optimizers import Budget, run_optimizer
-from framework.problem import UpdatingProblem, fd_points
+from framework.structures.smu import model as smu
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.problem import UpdatingProblem, fd_points
 
 
 def _seconds(fn, *args) -> float:

@@ -23,9 +23,9 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from framework.bench import main  # noqa: E402
-from framework.models.lab_frame import make_model, measured  # noqa: E402
-from framework.problem import UpdatingProblem  # noqa: E402
+from framework.structures.lab_frame.model import make_model, measured  # noqa: E402
+from framework.study.bench import main  # noqa: E402
+from framework.updating.problem import UpdatingProblem  # noqa: E402
 
 N_POINTS = 50_000
 N_SINGLE = 2_000

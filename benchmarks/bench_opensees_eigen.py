@@ -27,11 +27,12 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from framework.errors import ModelEvaluationError  # noqa: E402
+from framework.core.errors import ModelEvaluationError  # noqa: E402
 
 
 def _structures(bridge: bool) -> dict:
-    from framework.models import beam, lab_frame_detailed
+    from framework.structures.beam import model as beam
+    from framework.structures.lab_frame import detailed as lab_frame_detailed
 
     lab = lab_frame_detailed.make_model()
     beam_model = beam.make_opensees_model()
@@ -40,7 +41,7 @@ def _structures(bridge: bool) -> dict:
         "beam_opensees": (beam_model, ("-fullGenLapack",), tuple(beam_model.parameters.names)),
     }
     if bridge:
-        from framework.models.bridge import make_model
+        from framework.structures.bridge import make_model
 
         out["bridge_plain"] = (make_model(fast=False), ("",), ())
     return out

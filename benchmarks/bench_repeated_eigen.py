@@ -26,7 +26,8 @@ import time
 
 import numpy as np
 
-from framework.models import repeated_eigen, smu
+from framework.models import repeated_eigen
+from framework.structures.smu import model as smu
 
 
 def _solve_all(model, thetas) -> tuple[float, list]:

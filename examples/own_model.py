@@ -2,11 +2,11 @@
 
 import openseespy.opensees as ops
 
-from framework.measurements import MeasuredModes
+from framework.core.parameters import Parameter, ParameterSet
+from framework.measured.modes import MeasuredModes
 from framework.models.opensees import OpenSeesModel
 from framework.optimizers import Budget, run_optimizer
-from framework.parameters import Parameter, ParameterSet
-from framework.problem import UpdatingProblem
+from framework.updating.problem import UpdatingProblem
 
 
 def build(v):  # v: {parameter name: value}; creates the model in the OpenSees domain

@@ -14,7 +14,7 @@ from pathlib import Path
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from framework.errors import InputError  # noqa: E402
+from framework.core.errors import InputError  # noqa: E402
 
 
 def _cmd_run(args) -> int:
@@ -42,7 +42,7 @@ def _cmd_run(args) -> int:
 
 def _cmd_report(args) -> int:
     if args.reproduction:
-        from framework.analysis.reproduction import write
+        from framework.report.reproduction import write
 
         if not Path(args.reproduction).is_dir():
             raise InputError(f"report --reproduction: results folder {args.reproduction!r} not found")
@@ -54,7 +54,7 @@ def _cmd_report(args) -> int:
 
     files = report(Path(args.results_dir), shapes=args.shapes)
     if args.html:
-        from framework.figures.interactive import all_html
+        from framework.report.figures.interactive import all_html
 
         files += all_html(Path(args.results_dir))
     for f in files:
@@ -95,7 +95,7 @@ def _cmd_diagnose(args) -> int:
 
 
 def _cmd_bench(args) -> int:
-    from framework.bench import main as bench_main
+    from framework.study.bench import main as bench_main
 
     return bench_main(args.structures, workers=args.workers, repeats=args.repeats)
 

@@ -4,8 +4,8 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from framework.errors import ModelEvaluationError
-from framework.models.lab_frame import ThreeDofFrame
+from framework.core.errors import ModelEvaluationError
+from framework.structures.lab_frame.model import ThreeDofFrame
 
 
 @dataclass(frozen=True)

@@ -35,9 +35,9 @@ import signal
 import sys
 import time
 
-from framework.measurements import MeasuredModes
+from framework.core.parameters import Parameter, ParameterSet
+from framework.measured.modes import MeasuredModes
 from framework.models.opensees import OpenSeesModel, ops_module
-from framework.parameters import Parameter, ParameterSet
 
 #: uniaxialMaterial as imported, not the checking wrapper OpenSeesModel installs during a build.
 _RAW_UNIAXIAL_MATERIAL = ops_module().uniaxialMaterial

@@ -6,13 +6,13 @@ import pandas as pd
 import pytest
 import yaml
 
-from framework.errors import InputError
-from framework.models.lab_frame import make_model, measured
-from framework.problem import UpdatingProblem
-from framework.sensitivity import sensitivity_matrix
+from framework.core.errors import InputError
+from framework.structures.lab_frame.model import make_model, measured
 from framework.study.config import validate
 from framework.study.plan import plan
 from framework.study.runner import run_study
+from framework.updating.problem import UpdatingProblem
+from framework.updating.sensitivity import sensitivity_matrix
 from tests.tables import assert_same_tables
 
 SMALL = {
@@ -175,7 +175,7 @@ def test_cli_runs_an_analysis_config_and_report_redraws_its_figures(tmp_path):
 
 
 def test_comparison_takes_the_best_run_that_did_not_fail_of_each_model():
-    from framework.analysis import comparison
+    from framework.report.analyses import comparison
 
     runs = pd.DataFrame({"run_id": list("abcd"), "label": "pso", "variant": ["x", "x", "y", "y"],
                          "structure": ["s1", "s1", "s2", "s2"], "swarm_size": 20, "seed": [0, 1, 0, 1],

@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-from framework import damage
-from framework.errors import InputError, ModelEvaluationError
-from framework.evaluator import Evaluator
-from framework.models import beam
+from framework.core.errors import InputError, ModelEvaluationError
+from framework.damage import estimation as damage
 from framework.optimizers import Budget, run_optimizer
-from framework.problem import UpdatingProblem
+from framework.structures.beam import model as beam
+from framework.updating.evaluator import Evaluator
+from framework.updating.problem import UpdatingProblem
 
 
 def _random_theta(model, seed):
@@ -165,7 +165,7 @@ def test_lcurve_without_corner_warns(caplog):
     tau = np.logspace(-6, 2, 9)
     log_fit = np.linspace(-4, -2, 9)
     log_sol = -1 - 0.5 * (log_fit + 4) ** 2
-    with caplog.at_level("WARNING", logger="framework.damage"):
+    with caplog.at_level("WARNING", logger="framework.damage.estimation"):
         i = damage.lcurve_corner(tau, 10**log_fit, 10**log_sol)
     assert 0 < i < 8 and "no corner" in caplog.text
 

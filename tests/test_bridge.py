@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from framework.errors import InputError
-from framework.models import bridge
+from framework.core.errors import InputError
+from framework.structures import bridge
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 

@@ -5,8 +5,8 @@ import pickle
 import numpy as np
 import pytest
 
-from framework.correlation import mac_matrix, pair_modes
-from framework.models import bridge
+from framework.core.correlation import mac_matrix, pair_modes
+from framework.structures import bridge
 
 
 @pytest.fixture(scope="module")
@@ -57,8 +57,8 @@ def test_fast_model_pickles_without_its_operators(models):
 
 def _cable_state(fast, theta):
     from framework.models.base import full_theta
-    from framework.models.bridge import fast as bridge_fast
     from framework.models.opensees import ops_module, run_static
+    from framework.structures.bridge import fast as bridge_fast
 
     op = fast.operators
     ops = ops_module()
@@ -74,7 +74,7 @@ def _cable_state(fast, theta):
 
 
 def test_symmetry_blocks_equal_full_solution(models):
-    from framework.models.bridge import fast as bridge_fast
+    from framework.structures.bridge import fast as bridge_fast
 
     fast, _ = models
     op = fast.operators
@@ -90,7 +90,7 @@ def test_symmetry_blocks_equal_full_solution(models):
 
 
 def test_asymmetric_cable_state_uses_full_solution(models):
-    from framework.models.bridge import fast as bridge_fast
+    from framework.structures.bridge import fast as bridge_fast
 
     fast, _ = models
     _, k3 = _cable_state(fast, {})

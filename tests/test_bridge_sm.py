@@ -7,11 +7,11 @@ exact fit exists), and on the same problem with a bound cutting off the exact fi
 import numpy as np
 import pytest
 
-from framework.models.lab_frame import make_model, measured
-from framework.objectives import ObjectiveSpec
 from framework.optimizers import Budget, run_optimizer
 from framework.optimizers.sm import SMSettings, difference_points, pseudo_inverse_step
-from framework.problem import UpdatingProblem
+from framework.structures.lab_frame.model import make_model, measured
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.problem import UpdatingProblem
 
 NAMES = ["kyy", "kxx", "krr"]
 BUDGET = Budget(max_evaluations=400, target_objective=None, stall_tolerance=0.0)

@@ -8,9 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.analysis import updating_summary
-from framework.errors import InputError
-from framework.models import bridge
+from framework.core.errors import InputError
+from framework.report.analyses import updating_summary
+from framework.structures import bridge
 from framework.study.config import load, validate
 from framework.study.runner import run_study
 
@@ -166,7 +166,7 @@ def test_sm_starts_are_compared_per_method_and_pso_spread_per_label():
 
 
 def test_choices_table_comes_from_the_model_and_the_config():
-    from framework.analysis import choices
+    from framework.report.analyses import choices
 
     points = pd.DataFrame({"study": ["s", "s"], "variant": ["old", "new"], "lateral_restraint": ["guided", None],
                            "deck_section": ["slab_overhangs", None], "cable_elements": [4, 4]})

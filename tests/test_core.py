@@ -9,14 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from framework.errors import InputError
-from framework.evaluator import BudgetExhausted, Evaluator
-from framework.models.lab_frame import make_model, measured
-from framework.objectives import FORMULATIONS, ObjectiveSpec, RatioConstraint
+from framework.core.errors import InputError
 from framework.optimizers import OPTIMIZERS, Budget, run_optimizer
 from framework.optimizers.base import Termination
 from framework.optimizers.niching import derated
-from framework.problem import UpdatingProblem
+from framework.structures.lab_frame.model import make_model, measured
+from framework.updating.evaluator import BudgetExhausted, Evaluator
+from framework.updating.objectives import FORMULATIONS, ObjectiveSpec, RatioConstraint
+from framework.updating.problem import UpdatingProblem
 
 ROOT = Path(__file__).resolve().parents[1]
 TESTS = Path(__file__).resolve().parent
@@ -129,7 +129,7 @@ def test_evaluator_counts_budgets_and_records_failures():
 
 
 def test_sensitivities_are_not_counted_and_widen_keeps_steps_forward():
-    from framework.sensitivity import sensitivity_matrix
+    from framework.updating.sensitivity import sensitivity_matrix
 
     # torsion in sensor units (theta b/2): at the all-upper corner every mode stays paired
     # (in radians, the default reading, the 1st x mode pairs with no model mode there)
@@ -263,7 +263,7 @@ def test_objective_spec_keeps_keyword_and_config_construction():
 
 def test_alpha_zero_without_shapes_is_rejected_by_the_problem():
     data = measured()
-    from framework.measurements import MeasuredModes
+    from framework.measured.modes import MeasuredModes
 
     no_shapes = MeasuredModes(data.frequencies_hz)
     with pytest.raises(InputError, match="identically 0"):
@@ -272,7 +272,7 @@ def test_alpha_zero_without_shapes_is_rejected_by_the_problem():
 
 def test_every_formulation_validates_in_a_fresh_interpreter():
     code = (
-        "from framework.objectives import FORMULATIONS, ObjectiveSpec\n"
+        "from framework.updating.objectives import FORMULATIONS, ObjectiveSpec\n"
         "for name in FORMULATIONS:\n"
         "    assert ObjectiveSpec(formulation=name).formulation == name\n"
         "print(sorted(FORMULATIONS))\n"

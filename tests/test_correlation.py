@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from framework.correlation import comac, frequency_errors, mac, mac_matrix, mac_paired, msf, pair_modes
+from framework.core.correlation import comac, frequency_errors, mac, mac_matrix, mac_paired, msf, pair_modes
 
 finite = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False)
 vec = arrays(np.float64, st.integers(2, 8), elements=finite).filter(lambda v: np.linalg.norm(v) > 1e-3)
@@ -114,7 +114,7 @@ def test_pairing_frequency_window_and_order():
 @given(st.integers(0, 10_000), st.sampled_from(["mac", "frequency", "order"]),
        st.sampled_from([None, 0.2, 0.5]), st.floats(0.0, 0.95))
 def test_batch_pairing_equals_single_pairing(seed, method, window, threshold):
-    from framework.correlation import mac_matrix_batch, pair_modes_batch
+    from framework.core.correlation import mac_matrix_batch, pair_modes_batch
 
     rng = np.random.default_rng(seed)
     n, n_dof, m_a, m_e = 6, 4, 4, 3
@@ -133,9 +133,9 @@ def test_batch_pairing_equals_single_pairing(seed, method, window, threshold):
 
 
 def test_problem_batch_path_equals_single_path():
-    from framework.models.lab_frame import make_model, measured
-    from framework.objectives import ObjectiveSpec
-    from framework.problem import UpdatingProblem
+    from framework.structures.lab_frame.model import make_model, measured
+    from framework.updating.objectives import ObjectiveSpec
+    from framework.updating.problem import UpdatingProblem
 
     X = np.random.default_rng(5).random((50, 6))
     for spec in (ObjectiveSpec(), ObjectiveSpec(frequency_window=0.05, mac_threshold=0.99), ObjectiveSpec(beta=0)):

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 from framework.study.config import validate
 from framework.study.plan import plan
 from framework.study.runner import run_study

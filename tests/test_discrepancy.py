@@ -7,16 +7,16 @@ import math
 import numpy as np
 import pytest
 
-from framework.discrepancy import likelihood
-from framework.discrepancy.beam_effects import catalogue as beam_catalogue
-from framework.discrepancy.calibrate import calibrate
-from framework.discrepancy.generate import NOISE_LEVELS, HiddenCase, Noise, generate
-from framework.discrepancy.score import bic, rank
-from framework.discrepancy.tables import diagnosis_tables
-from framework.discrepancy.workflow import DiagnoseSettings, diagnose
-from framework.errors import InputError
-from framework.measurements import MeasuredModes
+from framework.core.errors import InputError
+from framework.diagnosis import likelihood
+from framework.diagnosis.calibrate import calibrate
+from framework.diagnosis.generate import NOISE_LEVELS, HiddenCase, Noise, generate
+from framework.diagnosis.score import bic, rank
+from framework.diagnosis.tables import diagnosis_tables
+from framework.diagnosis.workflow import DiagnoseSettings, diagnose
+from framework.measured.modes import MeasuredModes
 from framework.models.base import ModalResult
+from framework.structures.beam.effects import catalogue as beam_catalogue
 
 FAST = DiagnoseSettings(n_starts=2, max_evaluations=200)
 
@@ -159,7 +159,7 @@ def test_beam_hidden_effect_is_named_and_gap_shrinks(effect, seed):
 
 
 def test_lab_frame_semi_rigid_joints_named_and_null_case():
-    from framework.discrepancy.lab_effects import catalogue as lab_catalogue
+    from framework.structures.lab_frame.effects import catalogue as lab_catalogue
 
     cat = lab_catalogue()
     m = generate(cat, HiddenCase({"semi_rigid_joints": None}, seed=1, noise=NOISE_LEVELS["high"]))

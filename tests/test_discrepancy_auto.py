@@ -17,14 +17,14 @@ import pytest
 
 pytest.importorskip("openseespy.opensees")
 
-from framework.discrepancy.auto import Block, _condensed_end, with_candidates  # noqa: E402
-from framework.discrepancy.evidence import laplace_log_evidence  # noqa: E402
-from framework.discrepancy.generate import NOISE_LEVELS, HiddenCase, generate  # noqa: E402
-from framework.discrepancy.outcomes import agreement, cases, targets  # noqa: E402
-from framework.discrepancy.tables import diagnosis_rows  # noqa: E402
-from framework.discrepancy.workflow import DiagnoseSettings, diagnose  # noqa: E402
-from framework.errors import InputError  # noqa: E402
-from framework.models import frame_two_bay  # noqa: E402
+from framework.core.errors import InputError  # noqa: E402
+from framework.diagnosis.auto import Block, _condensed_end, with_candidates  # noqa: E402
+from framework.diagnosis.evidence import laplace_log_evidence  # noqa: E402
+from framework.diagnosis.generate import NOISE_LEVELS, HiddenCase, generate  # noqa: E402
+from framework.diagnosis.outcomes import agreement, cases, targets  # noqa: E402
+from framework.diagnosis.tables import diagnosis_rows  # noqa: E402
+from framework.diagnosis.workflow import DiagnoseSettings, diagnose  # noqa: E402
+from framework.structures.frame_two_bay import model as frame_two_bay  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "diagnosis"
@@ -105,7 +105,7 @@ def test_screened_auto_diagnosis_names_effect_and_location_with_every_round_in_t
 
 
 def test_out_of_candidate_effect_is_partial_never_explained():
-    from framework.discrepancy.effects import get_catalogue
+    from framework.diagnosis.effects import get_catalogue
 
     beam = with_candidates(get_catalogue("beam"), ["support_rotational_restraint", "localized_stiffness_loss"])
     data = generate(beam, HiddenCase({"midspan_mass": None}, {"midspan_mass_ratio": 0.3}, seed=1,
@@ -189,7 +189,7 @@ def test_user_module_in_a_temporary_folder_through_the_gomu_command(tmp_path):
     # a build that raises: one line naming the module and the error, exit 2, no traceback
     (tmp_path / "broken.py").write_text(
         "from my_frame import PARAMETERS, SENSORS\nfrom framework.models.opensees import OpenSeesModel\n"
-        "from framework.parameters import ParameterSet\n\n"
+        "from framework.core.parameters import ParameterSet\n\n"
         "def build(values):\n    raise ValueError('section table missing')\n\n"
         "def model():\n    return OpenSeesModel(build, ParameterSet(PARAMETERS), SENSORS, n_modes=4)\n")
     (tmp_path / "broken.yaml").write_text((tmp_path / "auto.yaml").read_text().replace("my_frame:model",

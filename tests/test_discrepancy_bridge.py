@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import yaml
 
-from framework.discrepancy.bridge_effects import catalogue
-from framework.discrepancy.generate import NOISE_LEVELS, HiddenCase, generate
-from framework.discrepancy.workflow import DiagnoseSettings, diagnose
+from framework.diagnosis.generate import NOISE_LEVELS, HiddenCase, generate
+from framework.diagnosis.workflow import DiagnoseSettings, diagnose
+from framework.structures.bridge.effects import catalogue
 
 #: the bridge's settings of the hidden-effect study (budgets sized for a shared 2-core machine)
 SETTINGS = DiagnoseSettings(

@@ -7,12 +7,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.errors import InputError
+from framework.core.errors import InputError
+from framework.core.tables import read_table, write_table
 from framework.study.config import validate
 from framework.study.plan import plan
 from framework.study.runner import run_study
 from framework.study.store import ResultStore
-from framework.tables import read_table, write_table
 
 SMALL = {
     "study": "engine",
@@ -144,7 +144,7 @@ def test_validate_imports_no_code_named_in_the_config_unless_asked(tmp_path, mon
     (tmp_path / "user_model.py").write_text(
         "import pathlib\n"
         f"pathlib.Path({str(marker)!r}).write_text('x')\n"
-        "from framework.models.lab_frame import make_model as _make\n"
+        "from framework.structures.lab_frame.model import make_model as _make\n"
         "def make_model(**options):\n    return _make(**options)\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     import yaml
@@ -158,7 +158,7 @@ def test_validate_imports_no_code_named_in_the_config_unless_asked(tmp_path, mon
     assert marker.exists()
 
 
-@pytest.mark.parametrize("reference", ["os:system", "subprocess:run", "framework.models.lab_frame:np"])
+@pytest.mark.parametrize("reference", ["os:system", "subprocess:run", "framework.structures.lab_frame.model:np"])
 def test_references_to_non_user_code_are_refused(tmp_path, reference):
     data = dict(SMALL, measured={"builtin": reference, "case": f"touch {tmp_path / 'pwned'}"},
                 output=str(tmp_path / "o"))
@@ -174,7 +174,7 @@ def test_gomu_finds_a_module_in_the_current_folder(tmp_path, monkeypatch):
     import yaml
 
     (tmp_path / "mine.py").write_text(
-        "from framework.models.lab_frame import make_model as _make\n"
+        "from framework.structures.lab_frame.model import make_model as _make\n"
         "def make_model(**options):\n    return _make(**options)\n")
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(dict(SMALL, structure={"name": "mine:make_model"})))
     gomu = Path(sys.executable).parent / "gomu"  # the console script: no '' on sys.path by itself

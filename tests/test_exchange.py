@@ -11,14 +11,14 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from framework.correlation import mac_matrix
-from framework.errors import InputError
-from framework.exchange import load_measured, parse_mapping, read_uff_modes, write_uff_modes
-from framework.exchange.mapping import SensorDof, load_mapping, parse_sensor_dof
-from framework.exchange.shapes import real_mode_shape
-from framework.measurements import MeasuredModes
-from framework.models.lab_frame import ThreeDofFrame
-from framework.problem import UpdatingProblem
+from framework.core.correlation import mac_matrix
+from framework.core.errors import InputError
+from framework.measured.complex_shapes import real_mode_shape
+from framework.measured.load import load_measured, parse_mapping, read_uff_modes, write_uff_modes
+from framework.measured.mapping import SensorDof, load_mapping, parse_sensor_dof
+from framework.measured.modes import MeasuredModes
+from framework.structures.lab_frame.model import ThreeDofFrame
+from framework.updating.problem import UpdatingProblem
 
 pyuff = pytest.importorskip("pyuff")
 
@@ -207,7 +207,7 @@ BRIDGE_MAP = {"dofs": {"101+x": "deck1_x", "102+x": "deck2_x", "102-y": "deck2_y
 def test_pyuff_written_file_with_mapping_file(tmp_path, caplog, complex_shapes):
     path, truth = _pyuff_file(tmp_path / "test.unv", complex_shapes=complex_shapes)
     mapping = _write_yaml(tmp_path / "map.yaml", BRIDGE_MAP)
-    with caplog.at_level(logging.INFO, logger="framework.exchange"):
+    with caplog.at_level(logging.INFO, logger="framework.measured"):
         m = load_measured(path, mapping)
     assert "1 measured test DOFs not in the mapping were ignored" in caplog.text  # 101+y
     np.testing.assert_allclose(m.frequencies_hz, [2.5, 4.75])
@@ -319,7 +319,7 @@ OMA_MAP = {"channels": {0: "y", 1: "-x", 2: "torsion"}}
 
 
 def test_from_pyoma2_ssi_result(oma_lab_frame):
-    from framework.exchange import from_pyoma2
+    from framework.measured.load import from_pyoma2
 
     truth, ssi, _ = oma_lab_frame
     m = from_pyoma2(ssi.result, OMA_MAP)
@@ -338,7 +338,7 @@ def test_from_pyoma2_ssi_result(oma_lab_frame):
 
 
 def test_from_pyoma2_fdd_result_and_errors(oma_lab_frame):
-    from framework.exchange import from_pyoma2
+    from framework.measured.load import from_pyoma2
 
     truth, _, fdd = oma_lab_frame
     m = from_pyoma2(fdd, {"channels": {"acc_y": "y", "acc_x": "-x"}}, channel_names=["acc_y", "acc_x", "acc_t"])

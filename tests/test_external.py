@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from framework.models import smu
-from framework.objectives import ObjectiveSpec
 from framework.optimizers import Budget, run_optimizer
-from framework.problem import UpdatingProblem
+from framework.structures.smu import model as smu
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.problem import UpdatingProblem
 
 pytestmark = [
     pytest.mark.smu,

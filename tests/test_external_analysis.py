@@ -8,8 +8,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.analysis import minima as minima_analysis
-from framework.analysis.minima import distinct_minima, final_points, method_summary
+from framework.report.analyses import minima as minima_analysis
+from framework.report.analyses.minima import distinct_minima, final_points, method_summary
 
 NAMES = ["alpha_1", "alpha_2", "alpha_3"]
 

@@ -8,16 +8,16 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.errors import InputError
-from framework.measurements import MeasuredModes
+from framework.core.errors import InputError
+from framework.core.parameters import Parameter, ParameterSet
+from framework.measured.modes import MeasuredModes
 from framework.models.base import ModalResult
-from framework.models.lab_frame import make_model, measured
-from framework.objectives import ObjectiveSpec
 from framework.optimizers import Budget, run_optimizer, settings_model
 from framework.optimizers.hybrid import distinct_best
 from framework.optimizers.sampling import sample
-from framework.parameters import Parameter, ParameterSet
-from framework.problem import UpdatingProblem
+from framework.structures.lab_frame.model import make_model, measured
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.problem import UpdatingProblem
 
 
 def lab_problem() -> UpdatingProblem:
@@ -173,7 +173,7 @@ def _same(a, b):
 
 
 def test_multistart_is_identical_on_serial_and_process_runners():
-    from framework.parallel import ProcessRunner
+    from framework.execution.parallel import ProcessRunner
 
     serial = _multistart()
     assert serial.extra["run_columns"]["n_starts_run"] == 6 and serial.n_evaluations <= 900
@@ -185,7 +185,7 @@ def test_multistart_is_identical_on_serial_and_process_runners():
 
 def test_multistart_is_identical_on_dask():
     distributed = pytest.importorskip("distributed")
-    from framework.parallel import DaskRunner
+    from framework.execution.parallel import DaskRunner
 
     serial = _multistart()
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)

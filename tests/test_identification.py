@@ -12,8 +12,7 @@ import pandas as pd
 import pytest
 import scipy.signal
 
-from framework.errors import InputError
-from framework.identification import lab_tests
+from framework.core.errors import InputError
 from framework.identification import pipeline as pl
 from framework.identification.excitation import jumping, sine_sweep
 from framework.identification.frf import h1_frf, pick_peaks, welch_segment_length
@@ -27,8 +26,9 @@ from framework.identification.subspace import (
     real_shape,
     ssi_cov_poles,
 )
-from framework.measurements import load as load_modes
-from framework.measurements import save as save_modes
+from framework.measured.modes import load as load_modes
+from framework.measured.modes import save as save_modes
+from framework.structures.lab_frame import vibration_tests as lab_tests
 from tests.tables import assert_same_tables
 
 
@@ -351,15 +351,15 @@ def test_pyoma2_shear_building_output_only_and_pyoma2_ssi(pyoma_example):
 # ---------------------------------------------------------------------------- bridge
 @pytest.fixture(scope="module")
 def bridge_truth():
-    from framework.identification import bridge_tests
+    from framework.structures.bridge import vibration_tests as bridge_tests
 
     return bridge_tests.true_modes()
 
 
 @pytest.mark.parametrize(("direction", "component"), [("vertical", "uz"), ("lateral", "uy")])
 def test_bridge_sweep_meets_acceptance_on_deck_modes(bridge_truth, direction, component):
-    from framework.identification import bridge_tests
     from framework.identification.datasets import BRIDGE_SETTINGS
+    from framework.structures.bridge import vibration_tests as bridge_tests
 
     # shortened record: 120 s sweep over 1-10 Hz instead of 391 s over 1-15 Hz
     full = bridge_tests.sweep(seed=21, direction=direction, duration_s=120.0, f_range_hz=(1.0, 10.0))
@@ -384,9 +384,9 @@ def test_bridge_sweep_meets_acceptance_on_deck_modes(bridge_truth, direction, co
 # ---------------------------------------------------------------------------- end to end
 def test_lab_update_from_identified_modes_recovers_true_parameters(lab_sweep):
     from framework.identification.datasets import LAB_SETTINGS
-    from framework.models import lab_frame
     from framework.optimizers import Budget, run_optimizer
-    from framework.problem import UpdatingProblem
+    from framework.structures.lab_frame import model as lab_frame
+    from framework.updating.problem import UpdatingProblem
 
     res = pl.identify(lab_sweep, LAB_SETTINGS)
     measured = pl.to_measured_modes(res.selected, "lab_identified", lab_tests.MODE_LABELS)

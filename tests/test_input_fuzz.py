@@ -12,9 +12,10 @@ import yaml
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from framework import measurements, textio
-from framework.errors import InputError
-from framework.measurements import MeasuredModes
+from framework.core import textio
+from framework.core.errors import InputError
+from framework.measured import modes as measurements
+from framework.measured.modes import MeasuredModes
 
 FUZZ = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 

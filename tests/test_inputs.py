@@ -1,4 +1,4 @@
-"""Parameters, measured-modes files and the strict text reader (framework.textio): loading and
+"""Parameters, measured-modes files and the strict text reader (framework.core.textio): loading and
 errors that name file, field and value; one test per input defect of issue 14."""
 
 import math
@@ -10,10 +10,11 @@ import numpy as np
 import pytest
 import yaml
 
-from framework import measurements, textio
-from framework.errors import InputError
-from framework.measurements import MeasuredModes
-from framework.parameters import Parameter, ParameterSet
+from framework.core import textio
+from framework.core.errors import InputError
+from framework.core.parameters import Parameter, ParameterSet
+from framework.measured import modes as measurements
+from framework.measured.modes import MeasuredModes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -93,7 +94,7 @@ def test_parameter_maps_roundtrip():
         ParameterSet([ps[0], ps[0]])
 
 
-# ---- framework.textio: the one reader of user YAML/CSV/text (issue 14, defects 3, 4, 7, 8) --------------
+# ---- framework.core.textio: the one reader of user YAML/CSV/text (issue 14, defects 3, 4, 7, 8) --------------
 
 
 def _read_error(tmp_path, text, name="c.yaml", **kw) -> str:

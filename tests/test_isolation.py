@@ -16,13 +16,13 @@ import numpy as np
 import psutil
 import pytest
 
-from framework.errors import ModelEvaluationError
-from framework.evaluator import Evaluator
-from framework.isolation import IsolatedRunner, exit_description, split
+from framework.core.errors import ModelEvaluationError
+from framework.execution.isolation import IsolatedRunner, exit_description, split
+from framework.execution.parallel import DaskRunner, ProcessRunner, make_evaluation_runner
 from framework.models.base import ModalResult, modal_many, safe_modal
-from framework.models.lab_frame import ThreeDofFrame
-from framework.parallel import DaskRunner, ProcessRunner, make_evaluation_runner
-from framework.problem import UpdatingProblem
+from framework.structures.lab_frame.model import ThreeDofFrame
+from framework.updating.evaluator import Evaluator
+from framework.updating.problem import UpdatingProblem
 
 pytest.importorskip("openseespy.opensees")
 
@@ -371,7 +371,7 @@ def _reasons_in_a_run_worker(evaluation_backend):
 
 
 def test_runs_on_the_process_backend_use_isolated_workers():
-    from framework.parallel import map_unordered
+    from framework.execution.parallel import map_unordered
 
     done = dict(map_unordered(_reasons_in_a_run_worker, ["serial", "processes"], backend="processes", workers=2))
     assert done == {0: EXPECTED, 1: EXPECTED}
@@ -380,7 +380,7 @@ def test_runs_on_the_process_backend_use_isolated_workers():
 # ---- Dask: on a Dask worker, isolation uses a child process of the worker ---------------------
 def test_dask_workers_survive_faulty_builds(model, reference):
     pytest.importorskip("distributed")
-    from framework.parallel import dask_client
+    from framework.execution.parallel import dask_client
 
     client = dask_client(workers=1)
     try:
@@ -409,12 +409,12 @@ PARENT = textwrap.dedent("""
     import sys, threading, time
     sys.path.insert(0, {root!r})
     from tests import faulty_build as fb
-    from framework.parallel import ProcessRunner, map_unordered
+    from framework.execution.parallel import ProcessRunner, map_unordered
 
     model = fb.make_model()
 
     def hang_in_isolated_worker(_):
-        from framework.isolation import IsolatedRunner
+        from framework.execution.isolation import IsolatedRunner
         return IsolatedRunner(1)(model, [fb.theta_in("hang")])
 
     runner = ProcessRunner(2)

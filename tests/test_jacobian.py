@@ -15,14 +15,15 @@ import math
 import numpy as np
 import pytest
 
-from framework.measurements import MeasuredModes
-from framework.modal_derivatives import CloseEigenvalues
-from framework.models import beam, smu
+from framework.core.modal_derivatives import CloseEigenvalues
+from framework.core.parameters import Parameter, ParameterSet
+from framework.measured.modes import MeasuredModes
 from framework.models.matrix import MatrixModel
-from framework.objectives import ObjectiveSpec
 from framework.optimizers import Budget, run_optimizer
-from framework.parameters import Parameter, ParameterSet
-from framework.problem import UpdatingProblem
+from framework.structures.beam import model as beam
+from framework.structures.smu import model as smu
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.problem import UpdatingProblem
 
 needs_smu = pytest.mark.skipif(not smu.available(), reason=f"SMU data not found in {smu.smu_dir()}")
 FREQUENCY_RTOL = 1e-6
@@ -129,7 +130,7 @@ def test_footbridge_jacobian(shape_term, solver):
 
 # ---- bridge fast path (OpenSees gravity, extracted K; cable tangents differenced) ----------------
 def test_bridge_fast_path_jacobian():
-    from framework.models import bridge
+    from framework.structures import bridge
 
     objective = ObjectiveSpec(pairing="mac", frequency_window=0.25,
                               ratio_constraints=[{"numerator": "K_t_deck", "denominator": "K_bearing"}])
@@ -178,7 +179,7 @@ def test_eigenvector_residuals_by_hand():
 
 
 def test_eigenvector_option_is_checked():
-    from framework.errors import InputError
+    from framework.core.errors import InputError
 
     with pytest.raises(InputError, match="shape_term must be one of"):
         ObjectiveSpec(formulation="reference", options={"shape_term": "modal_residual"})
@@ -194,7 +195,7 @@ def test_close_eigenvalues_fall_back_to_finite_differences(caplog):
     x = problem.parameters.to_normalized(np.array([3.0 * (1 + 1e-9), 0.0, 0.0]))
     with pytest.raises(CloseEigenvalues, match="relative gap"):
         model.modal_derivatives(problem.parameters.as_dict(problem.theta(x)))
-    with caplog.at_level(logging.WARNING, logger="framework.problem"):
+    with caplog.at_level(logging.WARNING, logger="framework.updating.problem"):
         first = problem.jacobian(x)
         second = problem.jacobian(x)
     assert first.method == "fd" and first.reason.startswith("close_eigenvalues") and first.cost == 3
@@ -210,7 +211,7 @@ def test_close_eigenvalues_fall_back_to_finite_differences(caplog):
 
 
 def test_failed_derivatives_fall_back_to_finite_differences():
-    from framework.errors import ModelEvaluationError
+    from framework.core.errors import ModelEvaluationError
 
     class Broken(MatrixModel):
         def modal_derivatives(self, theta, result=None, **kwargs):
@@ -250,7 +251,7 @@ def test_sm_exact_jacobian_counts_and_reaches_the_optimum_in_fewer_evaluations()
 
 
 def test_sm_exact_needs_derivatives():
-    from framework.models import lab_frame
+    from framework.structures.lab_frame import model as lab_frame
 
     problem = UpdatingProblem(lab_frame.make_model(), lab_frame.measured())
     with pytest.raises(ValueError, match="jacobian 'exact' needs a model with modal_derivatives"):
@@ -260,7 +261,7 @@ def test_sm_exact_needs_derivatives():
 
 
 def test_evaluator_jacobian_budget_and_history():
-    from framework.evaluator import BudgetExhausted, Evaluator
+    from framework.updating.evaluator import BudgetExhausted, Evaluator
 
     problem = UpdatingProblem(beam.make_model("apriori", n_modes=7), beam.measured("state1"))
     evaluator = Evaluator(problem, max_evaluations=7)

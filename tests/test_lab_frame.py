@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from framework.models.lab_frame import CASES, make_model, mass_matrix, measured, stiffness_matrix
 from framework.optimizers import Budget, run_optimizer
-from framework.problem import UpdatingProblem
+from framework.structures.lab_frame.model import CASES, make_model, mass_matrix, measured, stiffness_matrix
+from framework.updating.problem import UpdatingProblem
 
 
 def test_initial_frequencies_match_spec():

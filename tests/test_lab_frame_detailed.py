@@ -12,10 +12,10 @@ import pytest
 
 pytest.importorskip("openseespy")
 
-from framework.correlation import mac_paired  # noqa: E402
-from framework.errors import InputError  # noqa: E402
-from framework.models import lab_frame_detailed as lfd  # noqa: E402
+from framework.core.correlation import mac_paired  # noqa: E402
+from framework.core.errors import InputError  # noqa: E402
 from framework.models.opensees import ops_module  # noqa: E402
+from framework.structures.lab_frame import detailed as lfd  # noqa: E402
 
 
 @pytest.fixture
@@ -60,7 +60,7 @@ def test_total_mass_centre_of_mass_and_polar_moment():
 
 
 def test_added_mass_goes_to_the_slab_centre():
-    from framework.models.lab_frame import block_dimensions
+    from framework.structures.lab_frame.model import block_dimensions
 
     props = lfd.mass_properties(added_mass_kg=1.379)
     assert props["total_kg"] == pytest.approx(17.5 + 1.379, rel=1e-6)
@@ -145,7 +145,7 @@ def test_model_is_picklable_and_pure():
 
 def test_short_sensitivity_method_update_reaches_measured_frequencies():
     from framework.optimizers import Budget, run_optimizer
-    from framework.problem import UpdatingProblem
+    from framework.updating.problem import UpdatingProblem
 
     model = lfd.make_model()
     params = model.parameters.subset(lfd.UPDATED_PARAMETERS)
@@ -162,7 +162,7 @@ def test_short_sensitivity_method_update_reaches_measured_frequencies():
 
 def test_short_pso_run_improves_on_the_initial_model():
     from framework.optimizers import Budget, run_optimizer
-    from framework.problem import UpdatingProblem
+    from framework.updating.problem import UpdatingProblem
 
     model = lfd.make_model()
     params = model.parameters.subset(lfd.UPDATED_PARAMETERS)
@@ -178,7 +178,7 @@ def test_short_pso_run_improves_on_the_initial_model():
 def test_only_global_modes_are_paired_with_the_three_measured_dofs():
     """Local slab modes (> 20 Hz) look like pure x at the centre node (MAC ~0.99 on three
     DOFs); the model returns the three global modes only, so pairing cannot pick them."""
-    from framework.problem import UpdatingProblem
+    from framework.updating.problem import UpdatingProblem
 
     model = lfd.make_model(column_inset_m=0.04)
     assert model.n_modes == 3

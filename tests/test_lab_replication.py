@@ -10,11 +10,11 @@ import pandas as pd
 import pytest
 import yaml
 
-from framework.errors import InputError
-from framework.models import lab_frame as lf
+from framework.core.errors import InputError
 from framework.optimizers import run_optimizer
 from framework.optimizers.base import Budget
-from framework.problem import UpdatingProblem
+from framework.structures.lab_frame import model as lf
+from framework.updating.problem import UpdatingProblem
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -63,7 +63,7 @@ def test_the_added_block_changes_the_torsion_frequency():
 
 
 def test_the_detailed_frame_carries_the_block_inertia():
-    lfd = pytest.importorskip("framework.models.lab_frame_detailed")
+    lfd = pytest.importorskip("framework.structures.lab_frame.detailed")
     pytest.importorskip("openseespy")
     cyl = lfd.make_model(case="mass_1.379kg").modal({}).frequencies_hz
     point = lfd.make_model(case="mass_1.379kg", added_block="point").modal({}).frequencies_hz
@@ -157,7 +157,7 @@ def test_ga_toolbox_run_spends_pop_then_children_per_generation():
 
 
 def test_selection_summary_has_the_absolute_rule_beside_the_relative_one():
-    from framework.analysis.selection import convergence_summary
+    from framework.report.analyses.selection import convergence_summary
 
     runs = pd.DataFrame({
         "run_id": ["a", "b", "c", "d"], "label": ["x", "x", "y", "y"], "variant": ["v"] * 4,
@@ -187,7 +187,7 @@ def test_pointwise_evaluation_gives_the_vectorized_numbers(algorithm):
 
 
 def test_timing_table_scales_to_50000_evaluations():
-    from framework.analysis.timing import timing_table
+    from framework.report.analyses.timing import timing_table
 
     runs = pd.DataFrame({"label": ["ga", "ga"], "algorithm": ["ga", "ga"], "wall_s": [10.0, 12.0],
                          "n_evaluations": [49_988, 49_988], "objective": [1e-5, 2e-5]})

@@ -1,15 +1,41 @@
-"""The package's modules import each other without cycles (every import in a module counts,
-also those inside functions), so the layers of the README's architecture table hold."""
+"""The framework's packages form layers: nothing below imports from above, and no two packages
+import each other, counting every import (also those inside functions) and every module path
+written as a string (``"framework.x.y"`` or ``"framework.x.y:attr"``); no module imports itself
+in a cycle either. The README's Architecture section lists the same layers."""
 
 import ast
+import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
+#: bottom to top; a package may import only packages of a lower (or its own) layer
+LAYERS: list[tuple[str, ...]] = [
+    ("core",),
+    ("measured",),
+    ("models",),
+    ("execution",),
+    ("inference",),
+    ("updating",),
+    ("optimizers",),
+    ("damage", "diagnosis", "identification"),
+    ("report",),
+    ("structures",),
+    ("study",),
+    ("cli",),
+]
+LEVEL = {package: i for i, layer in enumerate(LAYERS) for package in layer}
+STRING_PATH = re.compile(r"framework(\.\w+)+(:\w+)?")
+
+
+def _modules() -> dict[str, Path]:
+    return {".".join(p.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): p
+            for p in (ROOT / "framework").rglob("*.py")}
+
 
 def _import_graph() -> dict[str, set[str]]:
-    files = {".".join(p.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): p
-             for p in (ROOT / "framework").rglob("*.py")}
+    """module -> the framework modules it names (imports, lazy imports and module-path strings)."""
+    files = _modules()
     edges: dict[str, set[str]] = {m: set() for m in files}
     for module, path in files.items():
         package = module if path.name == "__init__.py" else module.rpartition(".")[0]
@@ -23,17 +49,51 @@ def _import_graph() -> dict[str, set[str]]:
                     parts = package.split(".")
                     base = ".".join(parts[: len(parts) - node.level + 1] + ([base] if base else []))
                 targets = [base] + [f"{base}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str) \
+                    and STRING_PATH.fullmatch(node.value):
+                targets = [node.value.split(":")[0]]
             for target in targets:
                 while target and target not in files:
                     target = target.rpartition(".")[0]
-                if target and target != module and not module.startswith(target + ".") \
-                        and files[target].name != "__init__.py":
+                if target and target != module and not module.startswith(target + "."):
                     edges[module].add(target)
     return edges
 
 
-def test_no_import_cycles():
+def _package(module: str) -> str | None:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def test_every_package_has_a_layer():
+    packages = {_package(m) for m in _modules()} - {None}
+    assert packages <= set(LEVEL), f"packages without a layer: {sorted(packages - set(LEVEL))}"
+
+
+def test_nothing_below_imports_from_above():
+    upward = sorted(
+        f"{m} -> {t}"
+        for m, targets in _import_graph().items()
+        for t in targets
+        if _package(m) and _package(t) and LEVEL[_package(t)] > LEVEL[_package(m)]
+    )
+    assert upward == [], "imports that point up a layer:\n" + "\n".join(upward)
+
+
+def test_no_two_packages_import_each_other():
     edges = _import_graph()
+    pairs = {(_package(m), _package(t)) for m, ts in edges.items() for t in ts}
+    pairs = {(a, b) for a, b in pairs if a and b and a != b}
+    mutual = sorted({tuple(sorted(p)) for p in pairs if p[::-1] in pairs})
+    assert mutual == [], f"packages that import each other: {mutual}"
+
+
+def test_no_import_cycles_between_modules():
+    edges = _import_graph()
+    files = _modules()
+    # a package's __init__ that only re-exports its own modules is not a cycle with them
+    edges = {m: {t for t in ts if files[t].name != "__init__.py" or not m.startswith(t + ".")}
+             for m, ts in edges.items()}
     state: dict[str, int] = {}
     stack: list[str] = []
 

@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from framework.errors import InputError, ModelEvaluationError
-from framework.measurements import MeasuredModes
+from framework.core.errors import InputError, ModelEvaluationError
+from framework.core.parameters import Parameter, ParameterSet
+from framework.measured.modes import MeasuredModes
 from framework.models.base import ModalResult, safe_modal
 from framework.models.matrix import LinearStiffness, MatrixModel, load_matrices, solve_condensation
 from framework.models.shear_building import make_shear_building
-from framework.objectives import ObjectiveSpec
-from framework.parameters import Parameter, ParameterSet
-from framework.problem import UpdatingProblem
-from framework.reference_formulation import (
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.problem import UpdatingProblem
+from framework.updating.reference_formulation import (
     FORMULATION,
     normalize_at,
     reference_entries,

@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 
-from framework import damage
-from framework.models import beam
+from framework.core.parameters import Parameter, ParameterSet
+from framework.damage import estimation as damage
 from framework.optimizers import Budget, run_optimizer
 from framework.optimizers.nsga2 import _survival_class, nearest_to_ideal
-from framework.parameters import Parameter, ParameterSet
-from framework.problem import Evaluations, UpdatingProblem
+from framework.structures.beam import model as beam
+from framework.updating.problem import Evaluations, UpdatingProblem
 
 
 class ToyBiObjective:

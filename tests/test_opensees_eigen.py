@@ -15,9 +15,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.errors import ModelEvaluationError
+from framework.core.errors import ModelEvaluationError
+from framework.core.parameters import Parameter, ParameterSet
 from framework.models.opensees import OpenSeesModel
-from framework.parameters import Parameter, ParameterSet
 
 ops = pytest.importorskip("openseespy.opensees")
 from openseespy.opensees import equalDOF as _unrecorded_equal_dof  # noqa: E402 - bypasses the record
@@ -38,27 +38,27 @@ def _assert_agree(new, ref) -> None:
 
 
 def _lab_frame():
-    from framework.models import lab_frame_detailed
+    from framework.structures.lab_frame import detailed as lab_frame_detailed
 
     return lab_frame_detailed.make_model(), {"k_r2": 600.0, "k_r3": 20000.0}
 
 
 def _lab_frame_effects():
-    from framework.discrepancy import lab_effects
+    from framework.structures.lab_frame import effects as lab_effects
 
     model = lab_effects.make_model({"semi_rigid_joints": "", "sensor_mass_eccentricity": ""})
     return model, {"flex_r2": 1.5, "flex_r3": 0.5, "sensor_x_m": 0.2, "sensor_y_m": -0.22}
 
 
 def _beam():
-    from framework.models import beam
+    from framework.structures.beam import model as beam
 
     model = beam.make_opensees_model()
     return model, {model.parameters.names[2]: 0.6, model.parameters.names[7]: 0.8}
 
 
 def _bridge():
-    from framework.models import bridge
+    from framework.structures import bridge
 
     return bridge.make_model(fast=False), dict(zip(bridge.PARAMETER_NAMES, [0.8, 1.1, 0.9, 1.2, 0.7, 1.05]))
 
@@ -236,7 +236,7 @@ def test_sparse_shift_invert_path_agrees_with_the_dense_path(monkeypatch):
 _HISTORY_SCRIPT = """
 import sys
 import numpy as np
-from framework.models import lab_frame_detailed
+from framework.structures.lab_frame import detailed as lab_frame_detailed
 model = lab_frame_detailed.make_model(solver=sys.argv[1])
 point = {"k_r2": 700.0, "k_r3": 15000.0}
 others = [{"k_r2": 100.0 + 150.0 * i, "k_r3": 1000.0 + 4000.0 * i} for i in range(8)]
@@ -258,7 +258,7 @@ def test_same_point_gives_bit_identical_modes_whatever_ran_before_in_the_process
     digests = proc.stdout.split()
     assert len(digests) == 3 and len(set(digests)) == 1
     # and the same bits in this process, after everything the test session ran before
-    from framework.models import lab_frame_detailed
+    from framework.structures.lab_frame import detailed as lab_frame_detailed
 
     r = lab_frame_detailed.make_model(solver="scipy").modal({"k_r2": 700.0, "k_r3": 15000.0})
     assert (r.frequencies_hz.tobytes() + r.shapes.tobytes()).hex() == digests[0]

@@ -6,13 +6,13 @@ import pickle
 import numpy as np
 import pytest
 
-from framework.errors import ModelEvaluationError
-from framework.evaluator import Evaluator
-from framework.measurements import MeasuredModes
+from framework.core.errors import ModelEvaluationError
+from framework.core.parameters import Parameter, ParameterSet
+from framework.measured.modes import MeasuredModes
 from framework.models.opensees import OpenSeesModel
 from framework.optimizers import Budget, run_optimizer
-from framework.parameters import Parameter, ParameterSet
-from framework.problem import UpdatingProblem
+from framework.updating.evaluator import Evaluator
+from framework.updating.problem import UpdatingProblem
 
 ops = pytest.importorskip("openseespy.opensees")
 

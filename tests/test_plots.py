@@ -3,7 +3,7 @@
 import numpy as np
 import pandas as pd
 
-from framework.plots import frequencies, mode_ticks, robust_limits
+from framework.report.figures.updating import frequencies, mode_ticks, robust_limits
 
 
 def test_one_outlier_does_not_set_the_scale_and_is_counted():

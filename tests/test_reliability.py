@@ -232,9 +232,9 @@ def test_7_bad_command_lines(tmp_path, capsys, monkeypatch):
     (tmp_path / "file").write_text("x")
     _one_line_error(*_gomu(capsys, "run", cfg, "--set", f"output={tmp_path / 'file'}")[::2],
                     r"exists and is not a folder")
-    import framework.parallel
+    import framework.execution.parallel
 
-    monkeypatch.setattr(framework.parallel, "CONNECT_TIMEOUT_S", 0.5)
+    monkeypatch.setattr(framework.execution.parallel, "CONNECT_TIMEOUT_S", 0.5)
     _one_line_error(*_gomu(capsys, "run", cfg, "--scheduler", "tcp://127.0.0.1:1")[::2],
                     r"study\.yaml: execution\.scheduler \(or --scheduler\) tcp://127\.0\.0\.1:1: cannot connect")
     _one_line_error(*_gomu(capsys, "validate", cfg, "--set", "execution.scheduler=nowhere")[::2],
@@ -243,12 +243,12 @@ def test_7_bad_command_lines(tmp_path, capsys, monkeypatch):
 
 
 def test_7_an_unreachable_scheduler_touches_no_stored_run(tmp_path, capsys, monkeypatch):
-    import framework.parallel
+    import framework.execution.parallel
 
     cfg = _write(tmp_path, BASE)
     assert _gomu(capsys, "run", cfg, "--no-figures")[0] == 0
     before = sorted(p.name for p in (tmp_path / "out" / "_runs").glob("*.json"))
-    monkeypatch.setattr(framework.parallel, "CONNECT_TIMEOUT_S", 0.5)
+    monkeypatch.setattr(framework.execution.parallel, "CONNECT_TIMEOUT_S", 0.5)
     code, _, err = _gomu(capsys, "run", cfg, "--scheduler", "127.0.0.1:1")  # without --resume
     _one_line_error(code, err, "cannot connect")
     assert sorted(p.name for p in (tmp_path / "out" / "_runs").glob("*.json")) == before
@@ -291,9 +291,9 @@ def test_7_report_on_an_empty_folder_or_a_damaged_table(tmp_path, capsys):
 
 
 def test_7_python_api_arguments_of_the_wrong_type():
-    from framework.errors import InputError
-    from framework.models.lab_frame import ThreeDofFrame, measured
-    from framework.problem import UpdatingProblem
+    from framework.core.errors import InputError
+    from framework.structures.lab_frame.model import ThreeDofFrame, measured
+    from framework.updating.problem import UpdatingProblem
 
     with pytest.raises(InputError, match="argument 'measured' must be MeasuredModes"):
         UpdatingProblem(ThreeDofFrame(), {"frequency_hz": [3.58]})
@@ -339,7 +339,7 @@ def test_9_validate_imports_no_user_data_provider_of_a_diagnosis(tmp_path, capsy
     marker = tmp_path / "imported"
     (tmp_path / "rel_user_data.py").write_text(
         f"import pathlib\npathlib.Path({str(marker)!r}).write_text('x')\n"
-        "def data(case):\n    from framework.models.lab_frame import measured\n    return measured(case)\n")
+        "def data(case):\n    from framework.structures.lab_frame.model import measured\n    return measured(case)\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     cfg = _write(tmp_path, {"study": "d", "kind": "diagnose", "structure": "lab_frame",
                             "measured": {"builtin": "rel_user_data:data"}})
@@ -369,10 +369,10 @@ def test_10_a_study_name_cannot_leave_the_results_folder(tmp_path, capsys):
 
 
 def test_10_snt_spends_the_total_budget_not_one_per_minimum():
-    from framework.models.lab_frame import measured
-    from framework.models.registry import make_structure
     from framework.optimizers import Budget, run_optimizer
-    from framework.problem import UpdatingProblem
+    from framework.structures.lab_frame.model import measured
+    from framework.structures.registry import make_structure
+    from framework.updating.problem import UpdatingProblem
 
     problem = UpdatingProblem(make_structure("lab_frame_3dof"), measured())
     result = run_optimizer("snt", problem, 0, Budget(max_evaluations=600), n_minima=4)

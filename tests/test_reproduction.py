@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from framework.analysis import reproduction
 from framework.cli import main
+from framework.report import reproduction
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from framework.analysis.reproduction_beam import rows
+from framework.structures.beam.reproduction import rows
 
 RESULTS = Path(__file__).resolve().parents[1] / "results"
 KEYS = {"study", "item", "source", "ours", "choice", "verdict"}

@@ -14,9 +14,9 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from framework import measurements
 from framework.cli import main
-from framework.errors import InputError
+from framework.core.errors import InputError
+from framework.measured import modes as measurements
 from framework.study.config import validate
 from framework.study.runner import run_study
 
@@ -178,9 +178,9 @@ def test_a_dead_evaluation_worker_is_replaced(tmp_path, monkeypatch):
     monkeypatch.syspath_prepend(str(TESTS))
     import fault_models
 
-    from framework.models.lab_frame import measured
-    from framework.parallel import ProcessRunner
-    from framework.problem import UpdatingProblem
+    from framework.execution.parallel import ProcessRunner
+    from framework.structures.lab_frame.model import measured
+    from framework.updating.problem import UpdatingProblem
 
     runner = ProcessRunner(2)
     try:

@@ -1,4 +1,4 @@
-"""Mode-shape and correlation tables (framework.shapes) and their figures (framework.figures)."""
+"""Mode-shape and correlation tables (framework.report.shape_tables) and their figures (framework.report.figures)."""
 
 import runpy
 from pathlib import Path
@@ -7,15 +7,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.figures import draw_problem_shapes
-from framework.figures.shapes import paired_figure
-from framework.measurements import MeasuredModes
-from framework.models.lab_frame import make_model, measured
-from framework.problem import UpdatingProblem
-from framework.shapes.geometry import model_shapes
-from framework.shapes.tables import shape_tables
+from framework.measured.modes import MeasuredModes
+from framework.models.geometry import model_shapes
+from framework.report.figures import draw_problem_shapes
+from framework.report.figures.shapes import paired_figure
+from framework.report.shape_tables import shape_tables
+from framework.structures.lab_frame.model import make_model, measured
 from framework.study.config import validate
 from framework.study.runner import report, run_study
+from framework.updating.problem import UpdatingProblem
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -77,7 +77,7 @@ def test_opensees_user_model_from_examples_renders_a_mode_shape_figure(tmp_path)
     upd = pd.read_csv(tmp_path / "sensor_shapes.csv").query("state == 'updated'")
     np.testing.assert_allclose(upd["mac"], 1.0, atol=1e-9)
     pytest.importorskip("plotly")
-    from framework.figures.interactive import all_html
+    from framework.report.figures.interactive import all_html
 
     pages = all_html(tmp_path)
     assert [p.name for p in pages] == ["shapes_initial.html", "shapes_updated.html"]
@@ -98,7 +98,7 @@ def test_study_writes_shape_tables_on_resume_and_report_needs_no_model(tmp_path,
     states = set(pd.read_csv(out / "mode_shapes.csv")["state"])
     assert states == {"initial", "updated"}
 
-    import framework.models.registry as registry
+    import framework.structures.registry as registry
 
     def broken(*args, **kwargs):
         raise RuntimeError("model cannot be built here")

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 from framework.study.config import load, validate
 from framework.study.plan import plan
 from framework.study.runner import run_study

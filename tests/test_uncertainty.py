@@ -1,4 +1,4 @@
-"""Likelihood, linearized posterior and Laplace evidence (framework.uncertainty), and the
+"""Likelihood, linearized posterior and Laplace evidence (framework.inference), and the
 linearized columns of the updating run kind."""
 
 from dataclasses import replace
@@ -7,14 +7,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from framework.models.registry import builtin_measured, make_structure
-from framework.objectives import ObjectiveSpec
-from framework.parameters import Parameter, ParameterSet
-from framework.problem import UpdatingProblem
-from framework.uncertainty.evidence import laplace_log_evidence
-from framework.uncertainty.likelihood import Prior, noise_model
-from framework.uncertainty.linearized import linearized_posterior
-from framework.uncertainty.tables import linearized_columns
+from framework.core.parameters import Parameter, ParameterSet
+from framework.inference.evidence import laplace_log_evidence
+from framework.inference.likelihood import Prior, noise_model
+from framework.inference.linearized import linearized_posterior
+from framework.inference.tables import linearized_columns
+from framework.structures.registry import builtin_measured, make_structure
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.problem import UpdatingProblem
 
 
 def _lab_problem(std_hz=(0.02, 0.03, 0.04), use_shapes=False):
@@ -166,10 +166,10 @@ def test_updating_run_reports_linearized_columns(tmp_path):
 def test_four_story_singular_values_name_alpha_4_least_determined():
     """SMU four-storey frame (skipped without the data): at the MAP point of the Gaussian
     likelihood the least-determined direction is alpha_4, with a std several times the others'."""
-    from framework.discrepancy.likelihood import objective_spec, with_noise_model
-    from framework.models import smu
+    from framework.diagnosis.likelihood import objective_spec, with_noise_model
+    from framework.inference.linearized import at_optimum
+    from framework.structures.smu import model as smu
     from framework.study.kinds.posterior import map_point
-    from framework.uncertainty.linearized import at_optimum
 
     if not smu.available():
         pytest.skip(f"SMU data not found in {smu.smu_dir()}")

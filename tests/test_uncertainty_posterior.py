@@ -7,7 +7,7 @@ import pytest
 
 pytest.importorskip("emcee")
 
-from framework.uncertainty.sampling import run_dynesty, run_emcee, split_rhat  # noqa: E402
+from framework.inference.sampling import run_dynesty, run_emcee, split_rhat  # noqa: E402
 
 
 def _toy(rng, k=2, n=6):
@@ -135,7 +135,7 @@ def test_simulated_runs_report_coverage(tmp_path):
 
 
 def test_bad_sampler_settings_are_input_errors(tmp_path):
-    from framework.errors import InputError
+    from framework.core.errors import InputError
     from framework.study.plan import plan
 
     with pytest.raises(InputError, match="burn"):
@@ -147,9 +147,9 @@ def test_bad_sampler_settings_are_input_errors(tmp_path):
 def test_population_likelihood_equals_the_problems_residuals(structure, measured, options):
     """The one-call Gaussian residuals of a population equal UpdatingProblem.evaluate's, point
     by point, on measured and on simulated data, in process and through a process runner."""
-    from framework.parallel import make_evaluation_runner
+    from framework.execution.parallel import make_evaluation_runner
+    from framework.inference.batch import gaussian_residuals_batch
     from framework.study.kinds.posterior import build
-    from framework.uncertainty.batch import gaussian_residuals_batch
 
     for simulate in (None, {"frequency_std_rel": 0.005, "shape_std_rel": 0.02}):
         task = {"structure": {"name": structure, "options": options}, "measured": {"builtin": measured, "case": "base"},

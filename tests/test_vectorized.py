@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from framework.models.arrays import ModalArrays, array_method
-from framework.models.lab_frame import PARAMETERS, ThreeDofFrame, make_model, measured
-from framework.objectives import ModeCorrelations, ObjectiveSpec, RatioConstraint
-from framework.problem import UpdatingProblem
+from framework.structures.lab_frame.model import PARAMETERS, ThreeDofFrame, make_model, measured
+from framework.updating.objectives import ModeCorrelations, ObjectiveSpec, RatioConstraint
+from framework.updating.problem import UpdatingProblem
 
 SPECS = [
     ObjectiveSpec(),

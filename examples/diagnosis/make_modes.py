@@ -9,7 +9,7 @@ import my_frame
 import numpy as np
 import yaml
 
-from framework.discrepancy.auto import catalogue_of_model, with_auto
+from framework.diagnosis.auto import catalogue_of_model, with_auto
 
 cat = with_auto(catalogue_of_model(my_frame.model(), "my_frame", 4))
 truth = cat.model({"added_brace": "n1-n12"}).modal(

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import openseespy.opensees as ops
 
-from framework.discrepancy.effects import Catalogue, Effect
+from framework.core.parameters import Parameter, ParameterSet
+from framework.diagnosis.effects import Catalogue, Effect
 from framework.models.opensees import OpenSeesModel
-from framework.parameters import Parameter, ParameterSet
 
 E_PA = 210e9
 COLUMN = (149e-4, 25170e-8)  # HEB 300: area (m^2), second moment (m^4)

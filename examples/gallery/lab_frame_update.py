@@ -5,9 +5,9 @@ prints the updated parameters (physical values and ratios to initial) and the mo
 Run: ``python examples/gallery/lab_frame_update.py``
 """
 
-from framework.models.lab_frame import make_model, measured
 from framework.optimizers import Budget, run_optimizer
-from framework.problem import UpdatingProblem
+from framework.structures.lab_frame.model import make_model, measured
+from framework.updating.problem import UpdatingProblem
 
 
 def main() -> dict:

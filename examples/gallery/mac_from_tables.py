@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from framework.figures import draw_problem_shapes
-from framework.models.lab_frame import make_model, measured
-from framework.problem import UpdatingProblem
+from framework.report.figures import draw_problem_shapes
+from framework.structures.lab_frame.model import make_model, measured
+from framework.updating.problem import UpdatingProblem
 
 
 def main(out: Path) -> pd.DataFrame:

@@ -10,9 +10,9 @@ import runpy
 import sys
 from pathlib import Path
 
-from framework.figures import draw_problem_shapes
-from framework.measurements import MeasuredModes
-from framework.problem import UpdatingProblem
+from framework.measured.modes import MeasuredModes
+from framework.report.figures import draw_problem_shapes
+from framework.updating.problem import UpdatingProblem
 
 HERE = Path(__file__).resolve().parent
 

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
-from framework.correlation import mac_paired
-from framework.exchange import read_uff_modes, write_uff_modes
-from framework.measurements import MeasuredModes
-from framework.models.lab_frame import make_model
+from framework.core.correlation import mac_paired
+from framework.measured.load import read_uff_modes, write_uff_modes
+from framework.measured.modes import MeasuredModes
+from framework.structures.lab_frame.model import make_model
 
 MAPPING = """\
 dofs:

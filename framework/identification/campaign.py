@@ -22,10 +22,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from framework.errors import InputError
-from framework.identification import bridge_tests, lab_tests
+from framework.core.errors import InputError
 from framework.identification.records import VibrationRecord
-from framework.models import lab_frame
+from framework.structures.bridge import vibration_tests as bridge_tests
+from framework.structures.lab_frame import model as lab_frame
+from framework.structures.lab_frame import vibration_tests as lab_tests
 
 
 @dataclass(frozen=True)

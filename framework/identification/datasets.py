@@ -1,7 +1,7 @@
 """Identified modes as built-in measured data sets (for the registry and study configs).
 
 ``measured(case)`` simulates the tests with fixed seeds, identifies them and returns
-:class:`~framework.measurements.MeasuredModes` (deterministic, ~1 s for the lab frame,
+:class:`~framework.measured.modes.MeasuredModes` (deterministic, ~1 s for the lab frame,
 a few s for the bridge). They are the modes that ``studies/identification.yaml`` exports
 to ``results/identification/*_identified.yaml`` (same tests, seeds and settings; a test
 checks that they agree):
@@ -14,9 +14,9 @@ checks that they agree):
 
 from __future__ import annotations
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 from framework.identification.pipeline import IdentificationSettings
-from framework.measurements import MeasuredModes
+from framework.measured.modes import MeasuredModes
 
 CASES = ("lab_frame", "bridge_vertical", "bridge_lateral")
 
@@ -32,8 +32,9 @@ BRIDGE_SETTINGS = IdentificationSettings(
 
 def measured(case: str = "lab_frame") -> MeasuredModes:
     """Identified modes of a simulated test campaign (see the module docstring)."""
-    from framework.identification import bridge_tests, lab_tests
     from framework.identification import pipeline as pl
+    from framework.structures.bridge import vibration_tests as bridge_tests
+    from framework.structures.lab_frame import vibration_tests as lab_tests
 
     if case == "lab_frame":
         runs = [pl.identify(lab_tests.sweep(seed), LAB_SETTINGS).selected for seed in (1, 2, 3)]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.signal
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 
 
 def _n_samples(duration_s: float, sampling_hz: float) -> int:

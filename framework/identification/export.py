@@ -1,7 +1,7 @@
 """Identified modes as measured-modes files, from the ``identified`` and ``shapes`` tables.
 
 ``export_files(tables, out_dir, export)`` writes one ``<name>.yaml`` per entry of the
-study's ``report.export`` (format of :mod:`framework.measurements`): the modes identified by
+study's ``report.export`` (format of :mod:`framework.measured.modes`): the modes identified by
 ``method`` for test ``label`` (the mean over its records when it has several, else its one
 record, or the ``record`` named), of the run with the lowest seed; with variants, one file
 per variant (``<name>_<variant>.yaml``). ``true_labels`` names each mode after the true mode
@@ -18,11 +18,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 from framework.identification.pipeline import to_measured_modes
 from framework.identification.stability import SelectedModes
-from framework.measurements import MeasuredModes
-from framework.measurements import save as save_modes
+from framework.measured.modes import MeasuredModes
+from framework.measured.modes import save as save_modes
 
 log = logging.getLogger(__name__)
 

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 import scipy.signal
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 from framework.identification.records import VibrationRecord
 
 log = logging.getLogger(__name__)

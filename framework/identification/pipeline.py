@@ -18,13 +18,13 @@ import pandas as pd
 import scipy.signal
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from framework.correlation import mac_matrix
-from framework.errors import InputError
+from framework.core.correlation import mac_matrix
+from framework.core.errors import InputError
 from framework.identification.frf import FRF, h1_frf, pick_peaks
 from framework.identification.records import VibrationRecord
 from framework.identification.stability import SelectedModes, select_modes, stability_table
 from framework.identification.subspace import Poles, n4sid_poles, real_shape, ssi_cov_poles
-from framework.measurements import MeasuredModes
+from framework.measured.modes import MeasuredModes
 
 log = logging.getLogger(__name__)
 

@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from framework.errors import InputError
-from framework.io import atomic_write_bytes, atomic_write_text
+from framework.core.errors import InputError
+from framework.core.io import atomic_write_bytes, atomic_write_text
 
 _TIME_RTOL = 1e-6
 

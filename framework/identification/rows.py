@@ -32,7 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 from framework.identification.frf import FRF
 from framework.identification.stability import SelectedModes
 

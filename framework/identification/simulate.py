@@ -28,7 +28,7 @@ import numpy as np
 import scipy.linalg
 import scipy.signal
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 
 
 @dataclass(frozen=True)

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from framework.correlation import mac_matrix
-from framework.errors import InputError
+from framework.core.correlation import mac_matrix
+from framework.core.errors import InputError
 from framework.identification.subspace import Poles, modal_phase_collinearity, real_shape
 
 

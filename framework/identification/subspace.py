@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from framework.errors import InputError, MissingDependencyError
+from framework.core.errors import InputError, MissingDependencyError
 
 log = logging.getLogger(__name__)
 

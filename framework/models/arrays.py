@@ -7,9 +7,9 @@ A vectorized model may offer, next to ``modal_batch(thetas) -> list``, the metho
 which takes the parameter values as one matrix (columns named by ``names``, the other
 parameters at their initial values) and returns frequencies (n, m) and shapes
 (n, n_dof, m) without one Python object per point. The problem uses it on its in-process
-path (:meth:`framework.problem.UpdatingProblem.evaluate`); ``modal_batch`` stays the
+path (:meth:`framework.updating.problem.UpdatingProblem.evaluate`); ``modal_batch`` stays the
 protocol of every runner and must give the same numbers (build it from ``modal_arrays``,
-as :class:`framework.models.lab_frame.ThreeDofFrame` does).
+as :class:`framework.structures.lab_frame.model.ThreeDofFrame` does).
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from framework.errors import ModelEvaluationError
+from framework.core.errors import ModelEvaluationError
+from framework.core.parameters import ParameterSet
 from framework.models.base import ModalResult
-from framework.parameters import ParameterSet
 
 
 @dataclass(frozen=True)

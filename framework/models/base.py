@@ -5,7 +5,7 @@ model from scratch for the physical parameter values ``theta`` (a {name: value} 
 and returns a :class:`ModalResult` with frequencies and mode shapes read at the model's
 measurable DOFs. Nothing survives between calls, so a model is picklable and can be
 evaluated in any process. A failed evaluation raises
-:class:`framework.errors.ModelEvaluationError` with a reason.
+:class:`framework.core.errors.ModelEvaluationError` with a reason.
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from framework.errors import ModelEvaluationError
-from framework.parameters import ParameterSet
+from framework.core.errors import ModelEvaluationError
+from framework.core.parameters import ParameterSet
 
 
 @dataclass(frozen=True)
@@ -70,7 +70,7 @@ class StructuralModel(Protocol):
     which shapes are returned. modal(theta): modes for parameter values ``theta``
     (parameters not given keep their initial values).
 
-    Optional, for exact Jacobians (:mod:`framework.modal_derivatives`):
+    Optional, for exact Jacobians (:mod:`framework.core.modal_derivatives`):
     ``modal_derivatives(theta, result=None, *, parameters=None, modes=None)`` ->
     ModalDerivatives (d lambda / d theta and d phi / d theta of the mass-normalized shapes at
     ``dofs``; raises CloseEigenvalues for a repeated or close eigenvalue) and
@@ -106,7 +106,7 @@ def safe_modal(model: StructuralModel, theta: Mapping[str, float]):
 
     ``sys.exit()`` in a user's code becomes the failure "model_exit" instead of ending the
     process; KeyboardInterrupt still propagates (Ctrl-C stops a study). Native crashes and
-    hangs cannot be caught in-process: see :mod:`framework.isolation`.
+    hangs cannot be caught in-process: see :mod:`framework.execution.isolation`.
     """
     try:
         return model.modal(theta)

@@ -38,7 +38,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from framework.errors import ModelEvaluationError
+from framework.core.errors import ModelEvaluationError
 from framework.models.matrix import solve_shift_invert
 
 #: Up to this many equations the dense solver is used (above: shift-invert when few modes are asked).

@@ -26,7 +26,7 @@ stateless between calls (the matrices are read-only inputs).
 
 Exact modal derivatives (:meth:`MatrixModel.modal_derivatives`, for exact Jacobians):
 dK/dalpha_j = K_j, dM = 0, Nelson's method on the full (n_dof) problem with the full
-eigenvectors kept in ``ModalResult.meta["eigenvectors"]`` (see :mod:`framework.modal_derivatives`).
+eigenvectors kept in ``ModalResult.meta["eigenvectors"]`` (see :mod:`framework.core.modal_derivatives`).
 """
 
 from __future__ import annotations
@@ -40,16 +40,16 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
 
-from framework.errors import InputError, ModelEvaluationError
-from framework.modal_derivatives import (
+from framework.core.errors import InputError, ModelEvaluationError
+from framework.core.modal_derivatives import (
     CLOSE_EIGENVALUE_RTOL,
     ModalDerivatives,
     check_separated,
     eigen_derivatives,
     normalize_mass,
 )
+from framework.core.parameters import ParameterSet
 from framework.models.base import ModalResult, full_theta, safe_modal
-from framework.parameters import ParameterSet
 
 log = logging.getLogger(__name__)
 
@@ -324,7 +324,7 @@ class MatrixModel:
     ) -> ModalDerivatives:
         """Exact derivatives of the modes ``modes`` (default all) with respect to ``parameters``
         (names, default all): dK/dalpha_j = K_j (K is linear in alpha), dM = 0, Nelson's method
-        (:mod:`framework.modal_derivatives`). ``result``: this model's ModalResult at theta (saves
+        (:mod:`framework.core.modal_derivatives`). ``result``: this model's ModalResult at theta (saves
         the eigen solution); raises CloseEigenvalues for a repeated or close eigenvalue."""
         names = list(self._parameters.names if parameters is None else parameters)
         cols = [self._parameters.names.index(n) for n in names]
@@ -403,7 +403,7 @@ def from_file(
     (lower, upper) pair for every alpha_j or one pair per parameter; parameter_names:
     default ``alpha_1`` .. ``alpha_J``. DOF labels are ``dof<number>`` as given.
     """
-    from framework.parameters import Parameter
+    from framework.core.parameters import Parameter
 
     wanted = [*stiffness, mass] + ([base_stiffness] if base_stiffness else [])
     wanted += [measured_dofs] if isinstance(measured_dofs, str) else []

@@ -43,7 +43,7 @@ Eigen solvers (``solver``):
 The build function must be importable at module level (for process and Dask workers).
 A build that crashes the process (a segfault in native code, an abort after a NaN reached
 OpenSees) or hangs can only be contained by evaluating in an isolated worker
-(:mod:`framework.isolation`); exceptions and ``sys.exit()`` in the build become recorded
+(:mod:`framework.execution.isolation`); exceptions and ``sys.exit()`` in the build become recorded
 failures ("build_failed", "model_exit") in any process.
 """
 
@@ -58,12 +58,12 @@ from typing import Any
 
 import numpy as np
 
-from framework.errors import MissingDependencyError, ModelEvaluationError
+from framework.core.errors import MissingDependencyError, ModelEvaluationError
+from framework.core.parameters import ParameterSet
 from framework.models.base import ModalResult, full_theta
 from framework.models.eigen_solve import lowest_modes, sign_rule
 from framework.models.opensees_linear import LinearOperators, extract_linear_operators
 from framework.models.opensees_matrices import DofMap, DofRow, recording_constraints, stiffness_and_mass
-from framework.parameters import ParameterSet
 
 log = logging.getLogger(__name__)
 
@@ -377,7 +377,7 @@ def finite_arguments(ops):
     a later, valid evaluation. The module's commands are swapped for checking wrappers while a
     build function runs, so builds calling ``ops.command(...)`` are covered; commands imported
     by name (``from openseespy.opensees import node``) are not: evaluate such models in an
-    isolated worker (:mod:`framework.isolation`).
+    isolated worker (:mod:`framework.execution.isolation`).
     """
     global _guard_depth
     if _guard_depth:  # already guarded (a build inside a build)

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from framework.errors import ModelEvaluationError
+from framework.core.errors import ModelEvaluationError
 
 #: relative position of the linearity check point along each step
 CHECK_FRACTION = 0.37

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from framework.errors import ModelEvaluationError
+from framework.core.errors import ModelEvaluationError
 
 #: Constraint commands recorded during a build (see :func:`recording_constraints`).
 RECORDED_COMMANDS = ("equalDOF", "rigidLink", "rigidDiaphragm")

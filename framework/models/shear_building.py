@@ -18,9 +18,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from framework.errors import InputError
+from framework.core.errors import InputError
+from framework.core.parameters import Parameter, ParameterSet
 from framework.models.matrix import MatrixModel
-from framework.parameters import Parameter, ParameterSet
 
 
 def storey_matrices(n_floors: int) -> list[np.ndarray]:

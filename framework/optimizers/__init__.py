@@ -3,7 +3,7 @@
     run(evaluator, seed, budget, **settings) -> Outcome
 
 ``run_optimizer(name, problem, seed, budget, runner=..., progress=..., **settings)``
-creates the run's :class:`~framework.evaluator.Evaluator` (count, best point, history,
+creates the run's :class:`~framework.updating.evaluator.Evaluator` (count, best point, history,
 failures, budget), dispatches to the adapter by name and builds the
 :class:`OptimizerResult` from the evaluator; the problem itself is never changed, so one
 problem serves any number of runs. ``settings_model(name)`` returns the pydantic settings
@@ -16,9 +16,9 @@ import importlib
 import time
 from collections.abc import Callable
 
-from framework.errors import InputError
-from framework.evaluator import Evaluator
+from framework.core.errors import InputError
 from framework.optimizers.base import Budget, OptimizerResult, build_result
+from framework.updating.evaluator import Evaluator
 
 #: name -> (module, settings class name)
 OPTIMIZERS: dict[str, tuple[str, str]] = {

@@ -1,7 +1,7 @@
 """What every optimizer adapter shares: budget, termination rule, outcome, result, seeding.
 
 Every adapter has the signature ``run(evaluator, seed, budget, **settings) -> Outcome``.
-It sees the problem only through the run's :class:`~framework.evaluator.Evaluator`
+It sees the problem only through the run's :class:`~framework.updating.evaluator.Evaluator`
 (``objective(X)``, ``objective1(x)``, ``residuals(x)``, ``objectives(X)``, ``n_params``,
 ``parameters``, ``x_initial``), which counts, budgets and remembers the evaluations;
 ``run_optimizer`` builds the :class:`OptimizerResult` from the evaluator and the outcome.
@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from framework.evaluator import BudgetExhausted  # noqa: F401  (re-exported for the adapters)
+from framework.updating.evaluator import BudgetExhausted  # noqa: F401  (re-exported for the adapters)
 
 
 class Budget(BaseModel):
@@ -48,7 +48,7 @@ class OptimizerResult:
     """Outcome of one optimizer run (x in [0, 1]^k, theta in physical units).
 
     n_evaluations counts model evaluations (a two-state point counts 2) plus the
-    eigen-solve equivalents of exact Jacobians (see :mod:`framework.evaluator`); n_jacobians
+    eigen-solve equivalents of exact Jacobians (see :mod:`framework.updating.evaluator`); n_jacobians
     counts Jacobians (exact or finite-difference); history is the best successful objective
     after each evaluation (NaN before the first success); extra is plain JSON data.
     status "failed": no evaluation succeeded, and x_best, theta_best and objective are NaN.

@@ -50,10 +50,10 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import ConfigDict, Field, ValidationError, ValidationInfo, field_validator
 
-from framework.errors import InputError
-from framework.evaluator import Evaluator
+from framework.core.errors import InputError
 from framework.optimizers import sm
 from framework.optimizers.base import Budget, BudgetExhausted, Outcome, Settings
+from framework.updating.evaluator import Evaluator
 
 #: global phase algorithm -> (module, settings class)
 GLOBAL_ALGORITHMS: dict[str, tuple[str, str]] = {

@@ -7,18 +7,18 @@ from that point; the result is the best point over all starts.
 
 Design. The starts are independent, so whole SM sub-runs are farmed out, not single model
 evaluations: the adapter maps a pure function ``run_start(task) -> StartResult`` over the
-starts with :func:`framework.parallel.map_unordered` on the backend of the run's evaluation
+starts with :func:`framework.execution.parallel.map_unordered` on the backend of the run's evaluation
 runner (the ``execution.evaluation_backend`` of a study):
 
 - serial (``modal_many`` or an isolated serial runner): in this process, evaluating through
   the run's runner;
-- processes (:class:`~framework.parallel.ProcessRunner`): a pool of as many processes as
+- processes (:class:`~framework.execution.parallel.ProcessRunner`): a pool of as many processes as
   the runner has workers; each start evaluates in its process, isolated in a child process
   (with the runner's per-evaluation timeout) as the runner would;
-- Dask (:class:`~framework.parallel.DaskRunner`): one task per start on the runner's cluster
+- Dask (:class:`~framework.execution.parallel.DaskRunner`): one task per start on the runner's cluster
   (``worker_client`` when the run itself is a Dask task), isolated if the runner is.
 
-Each start has its own :class:`~framework.evaluator.Evaluator`; its record (count, values,
+Each start has its own :class:`~framework.updating.evaluator.Evaluator`; its record (count, values,
 failures, best point) comes back as plain data and is merged into the run's evaluator
 (``Evaluator.merge``) in start order, so the count, the history and the best point are
 those of a serial run.
@@ -69,11 +69,11 @@ from typing import Any
 import numpy as np
 from pydantic import Field, field_validator
 
-from framework.evaluator import BudgetExhausted, EvaluationRecord, Evaluator
 from framework.optimizers import sm
 from framework.optimizers.base import Budget, Outcome, Settings
 from framework.optimizers.hybrid import _START_KEYS, _check_nested
 from framework.optimizers.sampling import Sampler, sample
+from framework.updating.evaluator import BudgetExhausted, EvaluationRecord, Evaluator
 
 
 class MultiStartSettings(Settings):
@@ -151,7 +151,7 @@ def run_start(task: StartTask) -> StartResult:
     """One SM start (a pure function of the task; runs in any process)."""
     runner, close = task.runner, None
     if task.isolate is not None:
-        from framework.isolation import IsolatedRunner
+        from framework.execution.isolation import IsolatedRunner
 
         timeout_s, isolate_vectorized = task.isolate
         runner = IsolatedRunner(1, timeout_s, isolate_vectorized=isolate_vectorized)
@@ -171,7 +171,7 @@ def _backend(runner) -> tuple[str, int, object, tuple | None]:
     """(backend, workers, Dask client or None, isolation of each start) of the run's runner;
     anything else than a ProcessRunner or DaskRunner (``modal_many``, an isolated serial
     runner) is the serial backend, which evaluates through the runner itself."""
-    from framework.parallel import DaskRunner, ProcessRunner
+    from framework.execution.parallel import DaskRunner, ProcessRunner
 
     if isinstance(runner, ProcessRunner):
         return "processes", runner.workers, None, (runner.timeout_s, True)
@@ -183,7 +183,7 @@ def _backend(runner) -> tuple[str, int, object, tuple | None]:
 
 def _map(tasks: list[StartTask], runner) -> list[StartResult]:
     """Run the tasks on the backend of ``runner``; results in task order."""
-    from framework.parallel import map_unordered
+    from framework.execution.parallel import map_unordered
 
     backend, workers, client, isolation = _backend(runner)
     if backend == "serial":

@@ -34,7 +34,7 @@ from pydantic import Field
 
 from framework.optimizers import pso
 from framework.optimizers.base import Budget, Outcome, Settings
-from framework.problem import Evaluations
+from framework.updating.problem import Evaluations
 
 
 class SNTSettings(Settings):

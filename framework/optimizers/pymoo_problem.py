@@ -1,7 +1,7 @@
 """The one pymoo ``Problem`` wrapper of a run's evaluator, used by the GA and NSGA-II adapters.
 
 pymoo evaluates a whole population at once: ``_evaluate(X)`` forwards it to the run's
-:class:`~framework.evaluator.Evaluator` in normalized coordinates [0, 1]^k, which counts
+:class:`~framework.updating.evaluator.Evaluator` in normalized coordinates [0, 1]^k, which counts
 the evaluations. One objective: the scalar Pi (n, 1); several: the objective vectors
 ``evaluator.objectives(X)`` (n, n_obj).
 """

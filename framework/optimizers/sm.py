@@ -8,7 +8,7 @@ forward-difference Jacobian ("2-point", step ``diff_step`` relative) and bounds 
 the normalized parameters, which keeps steps inside the physical box.
 
 Jacobian (setting ``jacobian``): "exact" uses the problem's exact Jacobian from modal
-derivatives (:meth:`framework.problem.UpdatingProblem.jacobian`; an error if the model or
+derivatives (:meth:`framework.updating.problem.UpdatingProblem.jacobian`; an error if the model or
 the formulation has none), "fd" least_squares' forward differences, "auto" (default) the
 exact one when available and cheaper by count than forward differences (its cost bound in
 eigen-solve equivalents below the k model evaluations of a difference Jacobian), else

@@ -26,10 +26,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from framework.errors import InputError
+from framework.core.errors import InputError
+from framework.core.textio import parse_override_value, read_yaml_file
 from framework.study.kinds import get_kind
 from framework.study.schema import StudyHeader, format_error, validated
-from framework.textio import parse_override_value, read_yaml_file
 
 __all__ = ["format_error", "load", "parse_value", "read_with_overrides", "set_path", "validate"]
 
@@ -52,7 +52,7 @@ def set_path(data: dict, dotted: str, value: Any) -> None:
 
 
 def read_with_overrides(path: str | Path, overrides: list[str] | None = None, what: str = "config") -> dict:
-    """Read a YAML mapping strictly (:mod:`framework.textio`) and apply ``key.path=value`` overrides."""
+    """Read a YAML mapping strictly (:mod:`framework.core.textio`) and apply ``key.path=value`` overrides."""
     data = read_yaml_file(Path(path), what=what)
     for item in overrides or []:
         if "=" not in item:

@@ -20,7 +20,7 @@ import json
 import math
 from typing import Any
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 from framework.study.config import set_path, validate
 from framework.study.kinds import get_kind
 from framework.study.schema import MAX_PLANNED_RUNS, StudyHeader

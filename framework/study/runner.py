@@ -2,7 +2,7 @@
 
 plan -> check the inputs (the kind's preflight) -> claim the output folder -> execute the
 runs not stored yet (serial, processes or Dask) -> one atomic part per finished run ->
-consolidate the tables -> mode-shape tables (:mod:`framework.shapes.stage`) -> analyses
+consolidate the tables -> mode-shape tables (:mod:`framework.study.shapes`) -> analyses
 (table -> table) -> figures (from the tables).
 ``report(results_dir)`` redoes the last two from the stored tables and config alone.
 """
@@ -16,18 +16,18 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from framework.errors import InputError
-from framework.figures import shape_figures
-from framework.parallel import dask_client, map_unordered
-from framework.provenance import write_provenance
-from framework.shapes.stage import write_shape_tables
+from framework.core.errors import InputError
+from framework.core.provenance import write_provenance
+from framework.core.tables import read_tables, write_table
+from framework.core.textio import read_text_file
+from framework.execution.parallel import dask_client, map_unordered
+from framework.report.figures import shape_figures
 from framework.study.execute import error_tables, execute_run
 from framework.study.kinds import get_kind
 from framework.study.plan import plan
 from framework.study.schema import StudyHeader
+from framework.study.shapes import write_shape_tables
 from framework.study.store import ResultStore
-from framework.tables import read_tables, write_table
-from framework.textio import read_text_file
 
 log = logging.getLogger(__name__)
 
@@ -67,7 +67,7 @@ def run_study(
     Without ``resume`` the study's stored runs are discarded first. With it, stored runs
     (identified by their run id) are kept and skipped. A folder holding another study's
     results is refused, never overwritten. ``shapes`` (default: as ``figures``) writes the
-    mode-shape tables of :mod:`framework.shapes.stage` (it builds the model again).
+    mode-shape tables of :mod:`framework.study.shapes` (it builds the model again).
     """
     kind = get_kind(cfg.kind)
     out = cfg.output_dir(root)

@@ -35,7 +35,7 @@ from pydantic import (
     field_validator,
 )
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 
 #: upper limits that keep a config from asking for more than a machine can plan
 MAX_RUNS_PER_ENTRY = 100_000

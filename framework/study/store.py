@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from framework.errors import InputError
-from framework.io import atomic_write_text
-from framework.tables import frame_from_rows, read_table, sort_rows, write_table
+from framework.core.errors import InputError
+from framework.core.io import atomic_write_text
+from framework.core.tables import frame_from_rows, read_table, sort_rows, write_table
 
 log = logging.getLogger(__name__)
 

@@ -32,7 +32,7 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 
 KINDS: dict[str, str] = {
     "updating": "framework.study.kinds.updating",

@@ -22,7 +22,7 @@ One run per point (its ``label`` is the point's name, per variant of the study).
   "objective" pairs as the objective does; "type" pairs each measured mode with the
   nearest-frequency model mode of the same type (needs mode types in both);
 - ``sensitivity``: point x parameter x mode: relative sensitivities
-  S_f = (df/f)/(dp/p) and S_MAC = dMAC/(dp/p) by :func:`framework.sensitivity.sensitivity_matrix`
+  S_f = (df/f)/(dp/p) and S_MAC = dMAC/(dp/p) by :func:`framework.updating.sensitivity.sensitivity_matrix`
   (forward differences of relative step ``rel_step``); ``widen: [lo, hi]`` evaluates the
   differences with bounds [lo, hi] x initial, so no step is clipped or turned backwards at
   a bound;
@@ -46,8 +46,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from framework.errors import InputError, ModelEvaluationError
-from framework.objectives import ObjectiveSpec
+from framework.core.errors import InputError, ModelEvaluationError
 from framework.study.kinds.updating import (
     MeasuredConfig,
     ParametersConfig,
@@ -58,6 +57,7 @@ from framework.study.kinds.updating import (
 from framework.study.kinds.updating import check as _check_files
 from framework.study.kinds.updating import identity as _identity
 from framework.study.schema import Strict, StudyHeader
+from framework.updating.objectives import ObjectiveSpec
 
 log = logging.getLogger(__name__)
 
@@ -132,7 +132,7 @@ class Config(StudyHeader):
     @field_validator("report")
     @classmethod
     def _report(cls, v):
-        from framework.analysis import check_report
+        from framework.report.analyses import check_report
 
         try:
             return check_report(v)
@@ -244,9 +244,9 @@ def run(spec: dict) -> dict[str, list[dict]]:
 
 
 def sensitivity(problem, theta: np.ndarray, options: dict):
-    """:func:`framework.sensitivity.sensitivity_matrix` at theta (bounds widened to
+    """:func:`framework.updating.sensitivity.sensitivity_matrix` at theta (bounds widened to
     [lo, hi] x initial when ``widen`` is given, so no step is clipped)."""
-    from framework.sensitivity import sensitivity_matrix
+    from framework.updating.sensitivity import sensitivity_matrix
 
     widen = tuple(options["widen"]) if options.get("widen") else None
     return sensitivity_matrix(problem, theta0=theta, rel_step=options["rel_step"],
@@ -274,7 +274,7 @@ def sensitivity_rows(result, theta: np.ndarray, f0: np.ndarray, rel_step: float)
 def mode_rows(problem, theta: np.ndarray, pairings: list[str]) -> tuple[list[dict], int]:
     """Mode rows of one case at theta for each pairing, and the model evaluations spent."""
     from framework.models.base import safe_modal
-    from framework.objectives import correlation_table
+    from framework.updating.objectives import correlation_table
 
     measured = problem.measured
     result = safe_modal(problem.model, problem.parameters.as_dict(theta))
@@ -308,7 +308,7 @@ def type_pairing(result, measured):
     Returns (mode table, model index per measured mode, -1 when none)."""
     import pandas as pd
 
-    from framework.correlation import mac_paired, pair_modes
+    from framework.core.correlation import mac_paired, pair_modes
 
     types = measured.meta.get("mode_types")
     model_types = result.mode_info.get("mode_type")
@@ -356,12 +356,12 @@ def _data_columns(measured) -> dict[str, list]:
 
 # ---- analyses and figures ----------------------------------------------------------------
 def analyses(tables: dict, report: dict) -> dict:
-    from framework.analysis import run_analyses
+    from framework.report.analyses import run_analyses
 
     return run_analyses(tables, report)
 
 
 def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
-    from framework.analysis import analysis_figures
+    from framework.report.analyses import analysis_figures
 
     return analysis_figures(tables, out_dir, report)

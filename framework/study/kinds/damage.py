@@ -35,7 +35,7 @@ measured_mesh):
   curvature, chosen.
 
 Detections (threshold), comparisons and chosen tau per seed are analyses of these tables
-(:mod:`framework.analysis.damage_summary`), so changing the threshold keeps every run.
+(:mod:`framework.report.analyses.damage_summary`), so changing the threshold keeps every run.
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, StrictInt, field_validator, model_validator
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 from framework.study.schema import Strict, StudyHeader
 
 log = logging.getLogger(__name__)
@@ -115,7 +115,7 @@ class Config(StudyHeader):
     @field_validator("report")
     @classmethod
     def _report(cls, v):
-        from framework.analysis import check_report, damage_summary
+        from framework.report.analyses import check_report, damage_summary
 
         try:
             check_report(v)
@@ -171,7 +171,7 @@ def noise_seed(seed: int, state: str) -> int:
 
 
 def measurements(task: dict, seed: int) -> dict:
-    from framework.models import beam
+    from framework.structures.beam import model as beam
 
     return {st: beam.measured(st, task["noise_pct"], noise_seed(seed, st), n_modes=task["n_modes"],
                               mesh=task["measured_mesh"]) for st in STATES}
@@ -188,7 +188,7 @@ def _budget(evaluations: int):
 
 def _sm(problem, x0: np.ndarray, evaluations: int):
     """The sensitivity method from x0: ``run_optimizer("sm", x0=...)`` (see damage.polish)."""
-    from framework import damage
+    from framework.damage import estimation as damage
 
     return damage.polish(problem, x0, evaluations)
 
@@ -197,8 +197,8 @@ class _Run:
     """The problems of one run and the rows it collects."""
 
     def __init__(self, spec: dict):
-        from framework.models import beam
-        from framework.problem import UpdatingProblem
+        from framework.structures.beam import model as beam
+        from framework.updating.problem import UpdatingProblem
 
         self.spec, self.task, self.seed = spec, spec["task"], spec["seed"]
         self.model = beam.make_model(n_modes=max(7, self.task["n_modes"]))
@@ -210,7 +210,7 @@ class _Run:
         self.failed: list[str] = []
 
     def problem(self, state: str, tau: float = 0.0):
-        from framework.objectives import ObjectiveSpec
+        from framework.updating.objectives import ObjectiveSpec
 
         return self._problem(self.model, self.meas[state], objective=ObjectiveSpec(regularization_tau=tau))
 
@@ -292,7 +292,7 @@ def _single_objective(r: _Run) -> None:
 
 
 def _nsga2(r: _Run) -> None:
-    from framework import damage
+    from framework.damage import estimation as damage
     from framework.optimizers import run_optimizer
 
     task = r.task
@@ -320,7 +320,7 @@ def _nsga2(r: _Run) -> None:
 
 
 def _tikhonov(r: _Run) -> None:
-    from framework import damage
+    from framework.damage import estimation as damage
     from framework.optimizers import run_optimizer
 
     task = r.task
@@ -368,12 +368,12 @@ def _report(report: dict) -> dict:
 def analyses(tables: dict, report: dict) -> dict:
     """The comparison, damage-index and chosen-tau tables (``damage_summary``) and any
     other analysis named in ``report``."""
-    from framework.analysis import run_analyses
+    from framework.report.analyses import run_analyses
 
     return run_analyses(tables, _report(report))
 
 
 def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
-    from framework.analysis import analysis_figures
+    from framework.report.analyses import analysis_figures
 
     return analysis_figures(tables, out_dir, _report(report))

@@ -2,7 +2,7 @@
 
 A run calibrates the model under test of a structure's effect catalogue to measured modes
 (a file, a built-in data set, or data generated with hidden effects), tests the residuals,
-names the missing effect, adds it and repeats (:func:`framework.discrepancy.workflow.diagnose`).
+names the missing effect, adds it and repeats (:func:`framework.diagnosis.workflow.diagnose`).
 Example (one diagnosis; ``gomu diagnose`` or ``gomu run``)::
 
     study: lab_two_effects
@@ -18,14 +18,14 @@ A study of many diagnoses sweeps the data (``variants``: structure and hidden ef
 see ``studies/discrepancy.yaml``. A magnitude changes nothing when the hidden effects have
 no free parameter (or none at all): such runs are planned once, with magnitude 1.
 
-Tables (:mod:`framework.discrepancy.tables`): ``summary`` (one row per run, with ``status``
+Tables (:mod:`framework.diagnosis.tables`): ``summary`` (one row per run, with ``status``
 "completed" or "failed", ``error``, ``wall_s``, ``n_evaluations``, and every workflow
 setting as a column), ``rounds``, ``candidates``, ``modes``, ``parameters``, ``comac``.
 Every table carries the columns ``structure`` and, for generated data, ``hidden_effect``,
 ``magnitude`` and ``noise``.
 
 Report options (``report:``; they never change a run): ``outcomes: true`` derives the
-``cases`` and ``rates`` tables (:mod:`framework.discrepancy.outcomes`) and ``study.png``;
+``cases`` and ``rates`` tables (:mod:`framework.diagnosis.outcomes`) and ``study.png``;
 ``showcase_seeds: [1]`` draws ``showcase/<case>.png`` for every run of those seeds. A study of
 one run draws ``discrepancy.png``.
 
@@ -55,14 +55,14 @@ from pydantic import (
     model_validator,
 )
 
-from framework.discrepancy.auto import with_candidates
-from framework.discrepancy.config import MeasuredSource, data_seed, measured_of, noise_of, source_kind
-from framework.discrepancy.effects import Catalogue, get_catalogue
-from framework.discrepancy.score import NO_CHANGE
-from framework.discrepancy.tables import TABLES, diagnosis_rows
-from framework.discrepancy.workflow import DiagnoseSettings, diagnose
-from framework.errors import InputError, ModelEvaluationError
-from framework.models.registry import check_reference
+from framework.core.errors import InputError, ModelEvaluationError
+from framework.diagnosis.auto import with_candidates
+from framework.diagnosis.config import MeasuredSource, data_seed, measured_of, noise_of, source_kind
+from framework.diagnosis.effects import Catalogue, get_catalogue
+from framework.diagnosis.score import NO_CHANGE
+from framework.diagnosis.tables import TABLES, diagnosis_rows
+from framework.diagnosis.workflow import DiagnoseSettings, diagnose
+from framework.structures.registry import check_reference
 from framework.study.schema import MAX_RUNS_PER_ENTRY, Strict, StudyHeader
 
 log = logging.getLogger(__name__)
@@ -89,7 +89,7 @@ class Config(StudyHeader):
     start_effects: dict[str, str | None] = Field(default_factory=dict)
     measured: MeasuredSource
     #: candidate effects: "catalogue" (the hand-written ones), "auto" (generated from the
-    #: OpenSees model, :mod:`framework.discrepancy.auto`), or a list of names ("auto" = all generated)
+    #: OpenSees model, :mod:`framework.diagnosis.auto`), or a list of names ("auto" = all generated)
     candidates: Literal["catalogue", "auto"] | list[str] = "catalogue"
     #: workflow settings; those left out take the catalogue's recommendation, else the default
     settings: DiagnoseSettings = Field(default_factory=DiagnoseSettings)
@@ -113,7 +113,7 @@ class Config(StudyHeader):
         """A built-in catalogue, or ``module:function`` of a user module (returning a
         ``Catalogue`` or an ``OpenSeesModel``): checked by form here, imported only when the
         study runs or ``gomu validate --build`` asks (the trust model in the README)."""
-        from framework.discrepancy.effects import CATALOGUES
+        from framework.diagnosis.effects import CATALOGUES
 
         if v in CATALOGUES:
             return v
@@ -288,8 +288,8 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
 
 
 def _check_task(task: dict) -> None:
-    from framework.discrepancy import likelihood
-    from framework.problem import UpdatingProblem
+    from framework.diagnosis import likelihood
+    from framework.updating.problem import UpdatingProblem
 
     catalogue = catalogue_of(task)
     settings_of(task, catalogue)
@@ -370,7 +370,7 @@ def run_facts(task: dict, seed: int) -> dict[str, Any]:
 # ---- analyses and figures ----------------------------------------------------------------
 def analyses(tables: dict, report: dict) -> dict:
     """``cases`` and ``rates`` when ``report.outcomes`` is true."""
-    from framework.discrepancy.outcomes import agreement, cases, rates, targets
+    from framework.diagnosis.outcomes import agreement, cases, rates, targets
 
     options = ReportConfig.model_validate(report or {})
     if not options.outcomes or "summary" not in tables:
@@ -382,7 +382,7 @@ def analyses(tables: dict, report: dict) -> dict:
 
 def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
     """discrepancy.png (a study of one run), showcase/<case>.png, study.png (see module docstring)."""
-    from framework.discrepancy.report import case_figure, power_figure, study_figure
+    from framework.report.figures.diagnosis import case_figure, power_figure, study_figure
 
     options = ReportConfig.model_validate(report or {})
     out_dir = Path(out_dir)

@@ -23,7 +23,7 @@ frf_f_max_hz, frf_channels, frf_max_lines.
 
 Derived (from the tables, ``gomu report`` redoes them): ``accuracy`` (per run and record:
 true modes found, spurious modes, largest frequency and damping errors, smallest MAC), the
-figures of :mod:`framework.identification.figures`, and the measured-modes files asked for
+figures of :mod:`framework.report.figures.identification`, and the measured-modes files asked for
 in ``report.export`` (:mod:`framework.identification.export`).
 """
 
@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from pydantic import AfterValidator, Field, StrictBool, StrictInt, ValidationError, field_validator, model_validator
 
-from framework.errors import InputError
+from framework.core.errors import InputError
 from framework.study.schema import MAX_RUNS_PER_ENTRY, NAME_PATTERN, Strict, StudyHeader, format_error
 
 TABLES = ("runs", "modes", "identified", "shapes", "stability", "peaks", "frf")
@@ -414,7 +414,7 @@ def analyses(tables: dict, report: dict) -> dict:
 def figures(tables: dict, out_dir, report: dict) -> list:
     """The stability and FRF figures, and the measured-modes files of ``report.export``."""
     from framework.identification.export import export_files
-    from framework.identification.figures import frf_figures, stability_figures
+    from framework.report.figures.identification import frf_figures, stability_figures
 
     export = {k: v.model_dump() for k, v in ReportConfig.model_validate(report).export.items()}
     return stability_figures(tables, out_dir) + frf_figures(tables, out_dir) + export_files(tables, out_dir, export)

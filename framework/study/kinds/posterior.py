@@ -2,12 +2,12 @@
 
 One run: the problem of :mod:`framework.study.kinds.updating` (structure, measured data or data
 simulated from a truth drawn from the prior, parameters, objective; by default the Gaussian
-formulation of :mod:`framework.discrepancy.likelihood`), its likelihood and prior
-(:mod:`framework.uncertainty.likelihood`), then
+formulation of :mod:`framework.diagnosis.likelihood`), its likelihood and prior
+(:mod:`framework.inference.likelihood`), then
 
 1. the MAP point by least squares on the whitened residuals (bounded, from the initial point
    and ``map_starts - 1`` prior draws) and the linearized posterior there;
-2. the ensemble MCMC (``sampler``, :mod:`framework.uncertainty.sampling`), walkers started
+2. the ensemble MCMC (``sampler``, :mod:`framework.inference.sampling`), walkers started
    around the MAP point, every population evaluated in one call through the run's
    evaluation runner (serial, processes, dask);
 3. optionally nested sampling (``evidence: {name: dynesty}``) for ln Z;
@@ -40,10 +40,10 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, StrictInt
 
-from framework.errors import InputError
-from framework.objectives import ObjectiveSpec
+from framework.core.errors import InputError
 from framework.study.kinds import updating
 from framework.study.schema import Strict, StudyHeader
+from framework.updating.objectives import ObjectiveSpec
 
 log = logging.getLogger(__name__)
 
@@ -132,7 +132,7 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
 def _with_noise(measured, task: dict):
     """The data with standard deviations filled where absent (gaussian formulation), and the
     text naming what was assumed."""
-    from framework.discrepancy.likelihood import with_noise_model
+    from framework.diagnosis.likelihood import with_noise_model
 
     noise = task["noise"]
     assumed = []
@@ -147,10 +147,10 @@ def _with_noise(measured, task: dict):
 
 def build(task: dict, rng: np.random.Generator, structure_options=None, measured_cfg=None, simulated=None):
     """(problem, noise model, prior, truth or None) of the task (or of a validation case)."""
-    from framework.models.registry import make_structure
-    from framework.problem import UpdatingProblem
-    from framework.uncertainty.likelihood import Prior, noise_model
-    from framework.uncertainty.simulate import simulate
+    from framework.inference.likelihood import Prior, noise_model
+    from framework.inference.simulate import simulate
+    from framework.structures.registry import make_structure
+    from framework.updating.problem import UpdatingProblem
 
     options = {**task["structure"]["options"], **(structure_options or {})}
     model = make_structure(task["structure"]["name"], **options)
@@ -243,10 +243,10 @@ def run(spec: dict) -> dict[str, list[dict]]:
 
 
 def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
-    from framework.uncertainty.evidence import laplace_log_evidence
-    from framework.uncertainty.likelihood import log_posterior_x
-    from framework.uncertainty.linearized import at_optimum
-    from framework.uncertainty.sampling import EVIDENCE_SAMPLERS, SAMPLERS
+    from framework.inference.evidence import laplace_log_evidence
+    from framework.inference.likelihood import log_posterior_x
+    from framework.inference.linearized import at_optimum
+    from framework.inference.sampling import EVIDENCE_SAMPLERS, SAMPLERS
 
     t0 = time.perf_counter()
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
@@ -311,7 +311,7 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
 
 
 def _log_likelihood_x(problem, noise, runner):
-    from framework.uncertainty.batch import log_likelihood_batch
+    from framework.inference.batch import log_likelihood_batch
 
     def log_like(X):
         return log_likelihood_batch(problem, noise, np.atleast_2d(X), runner)
@@ -377,7 +377,7 @@ def analyses(tables: dict, report: dict) -> dict:
     """``coverage`` (runs with simulated data): per structure, method and parameter, the
     fraction of seeds whose 90 % interval holds the truth; ``agreement``: sampled vs linearized
     per run and parameter."""
-    from framework.uncertainty.report import agreement_table, coverage_table
+    from framework.report.figures.posterior import agreement_table, coverage_table
 
     out = {}
     cov = coverage_table(tables.get("parameters"))
@@ -390,6 +390,6 @@ def analyses(tables: dict, report: dict) -> dict:
 
 
 def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
-    from framework.uncertainty.report import posterior_figures
+    from framework.report.figures.posterior import posterior_figures
 
     return posterior_figures(tables, out_dir)

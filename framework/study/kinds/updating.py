@@ -18,7 +18,7 @@ cases with the updated values. Tables:
 - ``extra``: optimizer-specific facts as JSON text (SNT minima, singular values, ...);
 - ``identifiability``: run x singular direction of the whitened Jacobian at the optimum.
 
-The linearized uncertainty at the optimum (:mod:`framework.uncertainty.tables`, one Jacobian
+The linearized uncertainty at the optimum (:mod:`framework.inference.tables`, one Jacobian
 per run, never fatal) adds ``chi2``, ``n_data``, ``log_evidence_laplace``, ``uq_jacobian``,
 ``uq_error`` to ``runs`` and ``std``, ``ci90_lower``, ``ci90_upper`` (physical units),
 ``noise_assumed`` to ``parameters``.
@@ -35,15 +35,15 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import AfterValidator, ConfigDict, Field, StrictInt, ValidationError, field_validator, model_validator
 
-from framework.errors import InputError, ModelEvaluationError
-from framework.exchange import load_measured
-from framework.measurements import MeasuredModes
-from framework.models.registry import builtin_measured, check_reference, is_reference, make_structure
-from framework.objectives import ObjectiveSpec
+from framework.core.errors import InputError, ModelEvaluationError
+from framework.core.parameters import ParameterSet
+from framework.measured.load import load_measured
+from framework.measured.modes import MeasuredModes
 from framework.optimizers import OPTIMIZERS, Budget, run_optimizer, settings_model
-from framework.parameters import ParameterSet
-from framework.problem import UpdatingProblem
+from framework.structures.registry import builtin_measured, check_reference, is_reference, make_structure
 from framework.study.schema import Strict, StudyHeader, evaluation_isolation
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.problem import UpdatingProblem
 
 log = logging.getLogger(__name__)
 
@@ -183,7 +183,7 @@ class Config(StudyHeader):
     @field_validator("report")
     @classmethod
     def _report(cls, v):
-        from framework.analysis import check_report
+        from framework.report.analyses import check_report
 
         try:
             return check_report(v)
@@ -249,7 +249,7 @@ def effective_objective(objective: dict) -> dict:
     """The objective section as it acts: a formulation that reads no options (``spec``) gets none,
     so that a study sweeping the formulation and another formulation's options (e.g.
     ``objective.options.shape_term``) plans each of its runs once (equal tasks, one run id)."""
-    from framework.objectives import get_formulation
+    from framework.updating.objectives import get_formulation
 
     if objective.get("options") and get_formulation(objective["formulation"]).check_options is None:
         return {**objective, "options": {}}
@@ -345,7 +345,7 @@ def preflight(specs: list[dict], build_references: bool = True) -> None:
 
 def check_named_code(task: dict) -> None:
     """The checks of code named in a task that import nothing (``module:function`` form, not
-    the standard library; :func:`framework.models.registry.check_reference`)."""
+    the standard library; :func:`framework.structures.registry.check_reference`)."""
     name = task["structure"]["name"]
     if is_reference(name):
         check_reference(name, f"structure.name={name!r}")
@@ -378,8 +378,9 @@ def evaluation_runner(execution: dict, names_code: bool = False):
     """The runner of a run's model evaluations from the ``execution`` section: backend
     (serial, processes, dask), isolation of the model in a worker process (``isolate: auto``:
     when the structure is user code, ``names_code``) and the per-evaluation timeout
-    (:func:`framework.study.schema.evaluation_isolation`, :func:`framework.parallel.make_evaluation_runner`)."""
-    from framework.parallel import make_evaluation_runner
+    (:func:`framework.study.schema.evaluation_isolation`,
+    :func:`framework.execution.parallel.make_evaluation_runner`)."""
+    from framework.execution.parallel import make_evaluation_runner
 
     isolate, timeout_s = evaluation_isolation(execution, names_code)
     return make_evaluation_runner(
@@ -439,7 +440,7 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
     tables["extra"] = extra_rows({k: v for k, v in result.extra.items() if k != "run_columns"})
     if failed:
         return tables
-    from framework.uncertainty.tables import linearized_columns
+    from framework.inference.tables import linearized_columns
 
     uq = linearized_columns(problem, result.x_best, runner=runner)
     tables["runs"][0].update(uq["run"])
@@ -506,13 +507,13 @@ def extra_rows(extra: dict[str, Any]) -> list[dict]:
 # ---- analyses and figures ----------------------------------------------------------------
 def analyses(tables: dict, report: dict) -> dict:
     """Derived tables named in ``report`` (e.g. ``selection``), from the tables only."""
-    from framework.analysis import run_analyses
+    from framework.report.analyses import run_analyses
 
     return run_analyses(tables, report)
 
 
 def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
-    from framework.analysis import analysis_figures
-    from framework.plots import updating_figures
+    from framework.report.analyses import analysis_figures
+    from framework.report.figures.updating import updating_figures
 
     return updating_figures(tables, out_dir) + analysis_figures(tables, out_dir, report)

@@ -1,0 +1,1 @@
+"""Damage estimation (SPEC 7): damage indices, L-curve corner, two-state problems."""

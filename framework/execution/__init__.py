@@ -1,0 +1,1 @@
+"""Where model evaluations and runs execute: isolated worker processes, process pools, Dask."""

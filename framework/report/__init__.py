@@ -1,0 +1,1 @@
+"""Reporting: analyses (tables -> tables), figures drawn from tables, reproduction report."""

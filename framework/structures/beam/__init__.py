@@ -1,0 +1,1 @@
+"""Structure 3: the simply supported beam for damage estimation (SPEC 7)."""
