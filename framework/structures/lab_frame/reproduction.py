@@ -125,9 +125,10 @@ def _selection(results: Path) -> list[dict]:
         n_abs, n_rel = int(t["converged_absolute"].sum()), int(t["converged"].sum())
         ours = (f"absolute rule: {n_abs} of {len(t)} settings converged, relative rule (within 1e-5 of "
                 f"f* = {fmt(t['f_star'].iloc[0], 4)}): {n_rel}. " + "; ".join(parts))
-        choice = "source-given settings, 10 runs, 50 000 evaluations, 10-iteration window; GA crossover fraction " \
-                 "with the toolbox meaning (2 elite children: our assumption)" if name == "ga" else \
-                 "source-given settings, 10 runs, 50 000 evaluations, 10-iteration window"
+        choice = "source-given settings, 10 runs, 50 000 evaluations, 10-iteration window"
+        if name == "ga":
+            choice += ("; GA crossover fraction with the toolbox meaning (2 elite children: our assumption); "
+                       + _ga_mutation(read_table(results, "selection/ga/runs.csv")))
         if name == "annealing":
             choice = ("our assumption: pure dual_annealing (no local search); schedule -> visiting parameter "
                       "(exponential 2.62, Boltzmann 1.5), re-anneal interval -> restart_temp_ratio; T0 and the "
@@ -167,8 +168,21 @@ def _algorithms(results: Path) -> list[dict]:
                 ", ".join(f"{k} {v}" for k, v in g["status"].value_counts().sort_index().items()))
         mine = "(ours)" in label
         out.append({"study": LAB, "item": f"updating: {label}", "source": "" if mine else source, "ours": ours,
-                    "choice": _algorithm_choice(label), "verdict": ""})
+                    "choice": _algorithm_choice(label) + ("; " + _ga_mutation(g) if label == "ga" else ""),
+                    "verdict": ""})
     return out
+
+
+def _ga_mutation(runs) -> str:
+    """The GA mutation reading of a runs table (tables from before issue 27 have no column: uniform)."""
+    col = runs["mutation"].dropna().unique() if runs is not None and "mutation" in runs else []
+    reading = ", ".join(map(str, col)) or "uniform"
+    if reading == "adaptive_feasible":
+        return "mutation: the toolbox's adaptive feasible, its default for a bounded problem (issue 27)"
+    if reading == "uniform":
+        return ("mutation: per-gene uniform reset at rate 0.01 (the reading before issue 27, which cannot refine "
+                "a minimum; the replication now uses adaptive feasible)")
+    return f"mutation: {reading}"
 
 
 def _algorithm_choice(label: str) -> str:
