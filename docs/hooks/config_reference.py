@@ -92,7 +92,7 @@ def config_reference() -> str:
     header_fields = tuple(StudyHeader.model_fields)
     parts = [model_table(StudyHeader, "Header (every study)", 2)]
     for kind in KINDS:
-        cfg = get_kind(kind).Config
+        cfg = get_kind(kind).config
         parts.append(model_table(cfg, f"Run kind `{kind}`", 2, skip=header_fields))
     parts.append("## Optimizer settings\n\nThe `settings:` of an `algorithms:` entry, per `algorithm:`.\n")
     for name in OPTIMIZERS:
