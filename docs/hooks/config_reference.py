@@ -85,7 +85,7 @@ def model_table(model: type[BaseModel], title: str, level: int = 3, seen: set | 
 
 
 def config_reference() -> str:
-    from framework.optimizers import OPTIMIZERS, settings_model
+    from framework.optimizers import OPTIMIZERS
     from framework.study.kinds import KINDS, get_kind
     from framework.study.schema import StudyHeader
 
@@ -96,7 +96,7 @@ def config_reference() -> str:
         parts.append(model_table(cfg, f"Run kind `{kind}`", 2, skip=header_fields))
     parts.append("## Optimizer settings\n\nThe `settings:` of an `algorithms:` entry, per `algorithm:`.\n")
     for name in OPTIMIZERS:
-        parts.append(model_table(settings_model(name), f"`{name}`", 3))
+        parts.append(model_table(OPTIMIZERS[name].settings, f"`{name}`", 3))
     return "\n".join(parts)
 
 

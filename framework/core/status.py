@@ -21,6 +21,9 @@ status                    meaning
 ``max_iterations``        an optimizer stopped after ``budget.max_iterations`` iterations
 ``completed``             an optimizer did everything it was asked (SNT found ``n_minima`` minima,
                           a screening evaluated every point)
+``max_generations``       NSGA-II ran all its ``n_generations`` generations
+``not_converged``         the sensitivity method stopped without converging (least squares gave
+                          up, or its last iterate failed); its best successful point is the result
 ``failed``                finished without a usable result: the model failed at every point, no
                           mode was identified, an optimizer of a procedure failed, the data or
                           calibration of a diagnosis failed (``error`` says why)
@@ -48,6 +51,8 @@ class Status(StrEnum):
     BUDGET = "budget"
     MAX_ITERATIONS = "max_iterations"
     COMPLETED = "completed"
+    MAX_GENERATIONS = "max_generations"
+    NOT_CONVERGED = "not_converged"
     FAILED = "failed"
     ERROR = "error"
 

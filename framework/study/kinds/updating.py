@@ -34,14 +34,24 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import AfterValidator, ConfigDict, Field, StrictInt, ValidationError, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    ConfigDict,
+    Field,
+    SerializeAsAny,
+    StrictInt,
+    ValidationError,
+    field_serializer,
+    field_validator,
+    model_validator,
+)
 
 from framework.core.errors import InputError, ModelEvaluationError
 from framework.core.parameters import ParameterSet
 from framework.core.status import Status
 from framework.measured.load import load_measured
 from framework.measured.modes import MeasuredModes
-from framework.optimizers import OPTIMIZERS, Budget, run_optimizer, settings_model
+from framework.optimizers import OPTIMIZERS, Budget, Settings, run_optimizer
 from framework.structures.registry import builtin_measured, check_reference, is_reference, make_structure
 from framework.study.kinds.base import ANALYSES, Kind, task_key
 from framework.study.schema import Strict, StudyHeader
@@ -128,31 +138,36 @@ class BudgetConfig(Budget):
 
 class AlgorithmConfig(Strict):
     algorithm: str
-    settings: dict[str, Any] = Field(default_factory=dict)
+    #: the optimizer's settings: validated once, when the config is read, into the optimizer's
+    #: Settings object (:meth:`framework.optimizers.base.Optimizer.validate`), which the run
+    #: hands to the optimizer as it is; written back (config.yaml, variants) as given
+    settings: SerializeAsAny[Settings] = Field(default_factory=Settings)
     runs: StrictInt | None = Field(None, ge=1, le=100_000)
     budget: dict[str, Any] = Field(default_factory=dict)
     #: "pointwise": a population is evaluated one point per call (as the source's toolboxes;
     #: for timing), "batch": in one vectorized call where the model allows it (default)
     evaluation: Literal["batch", "pointwise"] = "batch"
 
-    @field_validator("algorithm")
+    @model_validator(mode="before")
     @classmethod
-    def _known(cls, v: str) -> str:
-        if v not in OPTIMIZERS:
-            raise ValueError(f"unknown algorithm {v!r}; known: {sorted(OPTIMIZERS)}")
-        return v
+    def _typed_settings(cls, data):
+        if not isinstance(data, dict) or not isinstance(data.get("algorithm"), str):
+            return data
+        name = data["algorithm"]
+        if name not in OPTIMIZERS:
+            raise ValueError(f"unknown algorithm {name!r}; known: {sorted(OPTIMIZERS)}")
+        try:
+            settings = OPTIMIZERS[name].validate(data.get("settings", {}))
+        except ValueError as exc:
+            raise ValueError(f"{exc} for algorithm {name!r}") from None
+        return {**data, "settings": settings}
+
+    @field_serializer("settings")
+    def _as_given(self, settings: Settings) -> dict:
+        return settings.model_dump(mode="json", exclude_unset=True)
 
     @model_validator(mode="after")
-    def _settings_valid(self):
-        try:
-            settings_model(self.algorithm).model_validate(self.settings, strict=True)
-        except ValidationError as exc:
-            first = exc.errors()[0]
-            loc = ".".join(str(p) for p in first["loc"])
-            msg = "unknown key" if first["type"] == "extra_forbidden" else first["msg"]
-            raise ValueError(
-                f"settings.{loc}: {msg} (value {first.get('input')!r}) for algorithm {self.algorithm!r}"
-            ) from None
+    def _budget_valid(self):
         try:
             Budget.model_validate(self.budget, strict=True)
         except ValidationError as exc:
@@ -225,10 +240,9 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
         _drop_empty_options(case.get("measured"))
     parts = []
     for label, alg in cfg.algorithms.items():
-        settings = settings_model(alg.algorithm).model_validate(alg.settings).model_dump(mode="json")
         budget = Budget.model_validate({**data["budget"], **alg.budget}).model_dump(mode="json")
         relevant = [k for k in sweep_values if not k.startswith("algorithms.") or k.startswith(f"algorithms.{label}.")]
-        task = {**common, "algorithm": alg.algorithm, "settings": settings, "budget": budget}
+        task = {**common, "algorithm": alg.algorithm, "settings": alg.settings, "budget": budget}
         if alg.evaluation != "batch":  # only when set: the ids of earlier runs stay
             task["evaluation"] = alg.evaluation
         columns = {"structure": cfg.structure.name, "algorithm": alg.algorithm}
@@ -250,9 +264,12 @@ def effective_objective(objective: dict) -> dict:
 
 
 def identity(task: dict) -> dict:
-    """What determines a run's result: the task, with each data file replaced by a hash of its
-    content (so moving a file or the project keeps the id)."""
+    """What determines a run's result, as plain data: the task, its optimizer settings as JSON
+    data (as validated, defaults filled in), each data file replaced by a hash of its content
+    (so moving a file or the project keeps the id)."""
     ident = dict(task)
+    if isinstance(task.get("settings"), Settings):
+        ident["settings"] = task["settings"].model_dump(mode="json")
     ident["measured"] = _measured_identity(task["measured"])
     ident["validation"] = [{**c, "measured": _measured_identity(c["measured"])} for c in task["validation"]]
     return ident
@@ -383,9 +400,10 @@ def run(spec: dict, runner) -> dict[str, list[dict]]:
     problem = build_problem(task)
     bar = _evaluation_bar(spec)
     try:
-        result = run_optimizer(task["algorithm"], problem, spec["seed"], Budget(**task["budget"]), runner=runner,
+        result = run_optimizer(task["algorithm"], problem, spec["seed"], Budget(**task["budget"]),
+                               settings=task["settings"], runner=runner,
                                progress=bar.update if bar is not None else None,
-                               pointwise=task.get("evaluation") == "pointwise", **task["settings"])
+                               pointwise=task.get("evaluation") == "pointwise")
     finally:
         if bar is not None:
             bar.close()
@@ -402,7 +420,7 @@ def run(spec: dict, runner) -> dict[str, list[dict]]:
         "failures": result.failures,
         "message": result.message,
         "condition_number": result.extra.get("condition_number", np.nan),
-        **setting_columns(task["settings"]),
+        **setting_columns(task["settings"].model_dump(mode="json")),
         **result.extra.get("run_columns", {}),  # an adapter's own result columns (hybrid phases)
     })
     tables["history"] = history_rows(result.history)
