@@ -38,6 +38,7 @@ ANALYSES: dict[str, str] = {
     "damage_summary": "framework.analysis.damage_summary",
     "congruence": "framework.analysis.congruence",
     "timing": "framework.analysis.timing",
+    "starts": "framework.analysis.starts",
 }
 
 

@@ -28,6 +28,7 @@ PROVIDERS: tuple[str, ...] = (
     "framework.analysis.reproduction_lab",
     "framework.analysis.reproduction_bridge",
     "framework.analysis.reproduction_beam",
+    "framework.analysis.reproduction_external",
 )
 
 HEADER = """# Reproduction of the source study
