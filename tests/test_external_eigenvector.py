@@ -25,6 +25,13 @@ SMU_BEST_X = np.array([
     -0.19999999999606502, -0.1999999999950267, -0.19999999999033116, 0.3999999999362281,
     0.39999999998414715, -0.7167670868884949, 3.995146279046477, -0.16328702519651556, 9.999999999725873])
 SMU_BEST_FVAL = 2.8473992839072975
+#: The same for its MAC formulation (form1): SteelPedBridg_form1_JAConinterior-point.mat, alpha(:, 94), fval(94).
+SMU_FORM1_BEST_X = np.array([
+    -0.09999999999995149, -0.05083958630637627, 0.39999999999282737, -0.1999999999842463,
+    -0.19999999999671822, -0.1999999999983309, -0.19999999999869045, -0.1999999999987347,
+    -0.19999999999868423, -0.19999999999835275, -0.19999999999680879, -0.19999999998368803,
+    0.3999999999914525, -0.716316726276667, 6.489273942356213, -0.09116966512332397, 9.999999999810436])
+SMU_FORM1_BEST_FVAL = 0.22672655553607596
 
 
 def _spec(weights: str) -> ObjectiveSpec:
@@ -103,6 +110,16 @@ def test_smu_as_run_reproduces_the_published_fval(footbridge):
     assert entry.objective1(x) == pytest.approx(2.13883, rel=1e-5)
 
 
+@pytest.mark.smu
+@needs_smu
+def test_mac_formulation_reproduces_the_published_form1_fval(footbridge):
+    model, measured = footbridge
+    problem = UpdatingProblem(model, measured, objective=ObjectiveSpec(
+        formulation="reference", options={"matching": "order", "weights": "std"}))
+    x = problem.parameters.to_normalized(SMU_FORM1_BEST_X)
+    assert problem.objective1(x) == pytest.approx(SMU_FORM1_BEST_FVAL, rel=1e-9)
+
+
 def test_eigenvector_weights_option_is_checked():
     with pytest.raises(InputError, match="eigenvector_weights must be one of"):
         ObjectiveSpec(formulation="reference", options={"shape_term": "eigenvector", "eigenvector_weights": "mode"})
@@ -115,12 +132,13 @@ def test_starts_table_counts_against_the_same_threshold():
         "label": ["sm"] * 4 + ["other"], "variant": ["a"] * 4 + ["b"],
         "objective": [1.999998, 2.0015, 2.5, 2.0019, 7.0],
         "n_evaluations": [100, 200, 300, 400, 50], "wall_s": [1.0, 3.0, 2.0, 5.0, 9.0],
+        "status": ["converged", "budget", "budget", "converged", "converged"],
     })
     source = {"a": {"best_objective": 2.0, "starts": 10, "reached": 7, "median_wall_s": 50.0, "name": "peer"}}
     t = starts.tables({"runs": runs}, reach_rel_tol=1e-3, source=source)["starts"].set_index("variant")
     a = t.loc["a"]
     assert a["reach_threshold"] == pytest.approx(1.999998 * 1.001)
-    assert a["reached"] == 3 and a["reached_share"] == pytest.approx(0.75)
+    assert a["reached"] == 3 and a["reached_share"] == pytest.approx(0.75) and a["stopped_by_budget"] == 2
     assert a["source_reached_share"] == pytest.approx(0.7) and bool(a["reached_comparable"])
     assert a["median_wall_s"] == pytest.approx(2.5) and a["wall_ratio_to_source"] == pytest.approx(0.05)
     assert a["best_rel_to_source"] == pytest.approx(-1e-6)

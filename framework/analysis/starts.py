@@ -5,7 +5,8 @@ Asked for with ``report: {starts: {reach_rel_tol: 0.001, source: {<variant or la
 Every run of a label is one start. Table ``starts``, one row per (label, variant):
 
 - ``runs``, ``best_objective``, ``median_objective``, ``mean_evaluations``,
-  ``median_wall_s`` and ``mean_wall_s`` per start (wall time of the run);
+  ``stopped_by_budget`` (runs with status "budget"), ``median_wall_s`` and ``mean_wall_s``
+  per start (wall time of the run);
 - ``reach_threshold`` = (1 + ``reach_rel_tol``) x ``reference_best``, the lower of our best
   and the source's best (so that both sides count starts against the same value);
   ``reached`` / ``reached_share``: our starts at or below it;
@@ -61,6 +62,7 @@ def starts_table(runs: pd.DataFrame, reach_rel_tol: float = 0.001, source: dict 
             "label": label, "variant": variant, "runs": len(g),
             "best_objective": best, "median_objective": float(g["objective"].median()),
             "mean_evaluations": float(g["n_evaluations"].mean()),
+            "stopped_by_budget": int((g["status"] == "budget").sum()) if "status" in g else 0,
             "median_wall_s": median_wall, "mean_wall_s": float(g["wall_s"].mean()),
             "reach_rel_tol": reach_rel_tol, "reference_best": reference, "reach_threshold": threshold,
             "reached": reached, "reached_share": reached / len(g),
