@@ -38,6 +38,7 @@ ANALYSES: dict[str, str] = {
     "damage_summary": "framework.report.analyses.damage_summary",
     "congruence": "framework.report.analyses.congruence",
     "timing": "framework.report.analyses.timing",
+    "starts": "framework.report.analyses.starts",
 }
 
 
