@@ -28,6 +28,7 @@ PROVIDERS: tuple[str, ...] = (
     "framework.structures.lab_frame.reproduction",
     "framework.structures.bridge.reproduction",
     "framework.structures.beam.reproduction",
+    "framework.structures.smu.reproduction",
 )
 
 HEADER = """# Reproduction of the source study

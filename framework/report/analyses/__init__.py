@@ -34,6 +34,7 @@ from framework.report.analyses import (
     modes,
     selection,
     sensitivity,
+    starts,
     timing,
     truth,
     updating_summary,
@@ -65,6 +66,7 @@ ANALYSES: dict[str, Analysis] = {a.name: a for a in (
     Analysis("damage_summary", damage_summary.tables, damage_summary.figures, damage_summary.check_options),
     Analysis("congruence", congruence.tables, congruence.figures),
     Analysis("timing", timing.tables, timing.figures),
+    Analysis("starts", starts.tables, starts.figures),
 )}
 
 
