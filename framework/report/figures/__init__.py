@@ -17,27 +17,6 @@ from framework.report.figures.shapes import model_modes_figure, paired_figure
 log = logging.getLogger(__name__)
 
 
-def save_compact(fig, path: str | Path, dpi: int = 100) -> Path:
-    """Write a figure as an 8-bit palette PNG (line drawings lose nothing visible; files are
-    3-4x smaller than matplotlib's RGBA PNG, which matters for committed 3-D figures)."""
-    import io
-
-    import matplotlib.pyplot as plt
-    from PIL import Image
-
-    from framework.core.io import atomic_write_bytes
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    plt.close(fig)
-    buf.seek(0)
-    image = Image.open(buf).convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT)
-    out = io.BytesIO()
-    image.save(out, format="PNG", optimize=True)
-    atomic_write_bytes(path, out.getvalue())
-    return Path(path)
-
-
 def shape_figures(out_dir: str | Path) -> list[Path]:
     """Every mode-shape and correlation figure the folder's tables support; returns the files."""
     from framework.core.tables import read_tables

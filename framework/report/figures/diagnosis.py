@@ -14,16 +14,12 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from framework.core.io import save_figure  # noqa: E402
-from framework.core.tables import write_table  # noqa: E402
-from framework.diagnosis.tables import diagnosis_tables  # noqa: E402
+from framework.core.tables import write_table
+from framework.diagnosis.tables import diagnosis_tables
+from framework.report.figures.style import save_figure, styled, subplots
 
 log = logging.getLogger(__name__)
 
@@ -39,11 +35,12 @@ def write(diagnosis, output: str | Path, figure: bool = True) -> dict[str, pd.Da
     return tables
 
 
+@styled
 def case_figure(tables: dict[str, pd.DataFrame], path: Path) -> None:
     """Four panels: frequency error and MAC per mode before/after, candidate Delta BIC, COMAC
     (the tables of one diagnosis)."""
     modes = tables["modes"]
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    fig, axes = subplots(2, 2, figsize=(11, 7.5))
     colors = {"before": "tab:red", "after": "tab:blue"}
     width = 0.38
     for k, stage in enumerate(("before", "after")):
@@ -96,8 +93,7 @@ def case_figure(tables: dict[str, pd.DataFrame], path: Path) -> None:
         ax.set(ylabel="COMAC", title="COMAC by sensor", ylim=(min(0.9, float(com["comac"].min()) - 0.02), 1.005))
         ax.legend(fontsize=7)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    save_figure(fig, path, dpi=110, tight=False)
+    save_figure(fig, path)
 
 
 OUTCOME_COLORS = {
@@ -110,6 +106,7 @@ OUTCOME_COLORS = {
 }
 
 
+@styled
 def study_figure(cases: pd.DataFrame, path: Path) -> None:
     """Gap before/after per case (max frequency error, log scale), coloured by naming outcome;
     one panel per structure (the ``cases`` table)."""
@@ -121,7 +118,7 @@ def study_figure(cases: pd.DataFrame, path: Path) -> None:
     )
     structures = sorted(ok["structure"].unique())
     n = max(len(structures), 1)
-    fig, axes = plt.subplots(1, n, figsize=(5.5 * n, 4.5), squeeze=False)
+    fig, axes = subplots(1, n, figsize=(5.5 * n, 4.5), squeeze=False)
     gaps = ["max_freq_error_pct_before", "max_freq_error_pct_after"]
     for ax, structure in zip(axes[0], structures):
         d = ok[ok["structure"] == structure]
@@ -134,9 +131,10 @@ def study_figure(cases: pd.DataFrame, path: Path) -> None:
         ax.set(xscale="log", yscale="log", xlabel="max |freq error| before (%)", ylabel="after (%)", title=structure)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    save_figure(fig, path, dpi=110, tight=False)
+    save_figure(fig, path)
 
 
+@styled
 def power_figure(cases: pd.DataFrame, path: Path) -> None:
     """Power curve: rate of the correct effect and location named against the hidden effect's
     magnitude, one line per noise level, one panel per structure (cases with the hidden
@@ -146,7 +144,7 @@ def power_figure(cases: pd.DataFrame, path: Path) -> None:
         ok = ok[ok["hidden_in_candidates"].astype(bool)]
     structures = sorted(ok["structure"].unique())
     n = max(len(structures), 1)
-    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.6), squeeze=False)
+    fig, axes = subplots(1, n, figsize=(4.2 * n, 3.6), squeeze=False)
     for ax, structure in zip(axes[0], structures):
         d = ok[ok["structure"] == structure]
         for noise, dd in d.groupby("noise"):
@@ -159,4 +157,4 @@ def power_figure(cases: pd.DataFrame, path: Path) -> None:
                ylim=(-0.03, 1.03))  # fmt: skip
         ax.legend(fontsize=6)
     fig.tight_layout()
-    save_figure(fig, path, dpi=110, tight=False)
+    save_figure(fig, path)

@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from framework.report.figures.style import save_figure, styled, subplots
+
 NOMINAL = 0.9
 
 
@@ -44,10 +46,9 @@ def agreement_table(parameters: pd.DataFrame | None) -> pd.DataFrame | None:
     return out
 
 
+@styled
 def posterior_figures(tables: dict, out_dir: Path) -> list[Path]:
     """Corner plot (draws), predictive bands (predictive) and coverage bars (coverage)."""
-    import matplotlib.pyplot as plt
-
     out_dir = Path(out_dir)
     written: list[Path] = []
     draws = tables.get("draws")
@@ -55,7 +56,7 @@ def posterior_figures(tables: dict, out_dir: Path) -> list[Path]:
         for run_id, d in draws.groupby("run_id") if "run_id" in draws else [("", draws)]:
             names = [c for c in tables["parameters"]["parameter"].unique() if c in d]
             k = len(names)
-            fig, axes = plt.subplots(k, k, figsize=(1.9 * k, 1.9 * k), squeeze=False)
+            fig, axes = subplots(k, k, figsize=(1.9 * k, 1.9 * k), squeeze=False)
             for i in range(k):
                 for j in range(k):
                     ax = axes[i, j]
@@ -73,15 +74,14 @@ def posterior_figures(tables: dict, out_dir: Path) -> list[Path]:
                     ax.tick_params(labelsize=5)
             fig.tight_layout()
             path = out_dir / (f"corner_{str(run_id)[:8]}.png" if run_id else "corner.png")
-            fig.savefig(path, dpi=110)
-            plt.close(fig)
+            save_figure(fig, path)
             written.append(path)
             break  # one corner plot (the first run) per study
     pred = tables.get("predictive")
     if pred is not None and len(pred) and "ci90_lower_hz" in pred:
         first = pred[pred["run_id"] == pred["run_id"].iloc[0]] if "run_id" in pred else pred
         first = first.dropna(subset=["ci90_lower_hz"])
-        fig, ax = plt.subplots(figsize=(7, 3.5))
+        fig, ax = subplots(figsize=(7, 3.5))
         labels = [f"{c}\n{m}" for c, m in zip(first["case"], first["mode"])]
         x = np.arange(len(first))
         fe = first["f_measured_hz"].to_numpy()
@@ -97,12 +97,11 @@ def posterior_figures(tables: dict, out_dir: Path) -> list[Path]:
         ax.legend(fontsize=7)
         fig.tight_layout()
         path = out_dir / "predictive.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save_figure(fig, path)
         written.append(path)
     cov = tables.get("coverage")
     if cov is not None and len(cov):
-        fig, ax = plt.subplots(figsize=(8, 3.5))
+        fig, ax = subplots(figsize=(8, 3.5))
         cov = cov.reset_index(drop=True)
         for i, (method, g) in enumerate(cov.groupby("method")):
             ax.plot(np.arange(len(g)) + 0.15 * i, g["coverage"], "o", label=method)
@@ -115,7 +114,6 @@ def posterior_figures(tables: dict, out_dir: Path) -> list[Path]:
         ax.legend(fontsize=7)
         fig.tight_layout()
         path = out_dir / "coverage.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        save_figure(fig, path)
         written.append(path)
     return written
