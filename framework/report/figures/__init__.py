@@ -1,4 +1,17 @@
-"""Figures of mode shapes and correlation, drawn from a results folder's tables only.
+"""Every figure of gomu, drawn from a results folder's tables only (never from a model or
+from in-memory state), one module per subject, each through :mod:`.style` (the one backend
+choice, style, resolution and file format; no other module imports matplotlib):
+
+- :mod:`.updating`: an updating study (convergence, parameters, frequencies, validation);
+- :mod:`.shapes` and :mod:`.correlation`: mode shapes, MAC, auto-MAC and COMAC of every
+  study with shape tables (:func:`shape_figures` below); :mod:`.interactive`: the shapes
+  as an HTML page (plotly);
+- :mod:`.modes`, :mod:`.sensitivity`, :mod:`.selection`, :mod:`.minima`,
+  :mod:`.comparison`, :mod:`.updating_summary`, :mod:`.damage_summary`: the figures of the
+  analyses of the same name (:mod:`framework.report.analyses` computes their tables and
+  calls these);
+- :mod:`.identification`, :mod:`.diagnosis`, :mod:`.posterior`: the figures of the run
+  kinds of the same name (a kind's ``figures`` hook calls them).
 
 ``shape_figures(out_dir)`` reads the tables written by :mod:`framework.study.shapes`
 (``geometry``, ``mode_shapes``, ``sensor_shapes``, ``mac_matrix``, ``comac``) and draws
