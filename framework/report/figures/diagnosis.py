@@ -5,6 +5,9 @@
 - :func:`study_figure` (``study.png``): many diagnoses of data with hidden effects: the gap
   before against after per case, coloured by outcome (the ``cases`` table of
   :mod:`framework.diagnosis.outcomes`);
+- :func:`power_figure` (``power.png``): rate of the correct effect named against the hidden
+  effect's magnitude;
+- :func:`diagnosis_figures`: those of a ``diagnose`` study (the kind's ``figures`` hook);
 - :func:`write`: a diagnosis's tables (CSV + Parquet, atomic) and its figure, for the
   Python API (studies write through the engine's store instead).
 """
@@ -158,3 +161,40 @@ def power_figure(cases: pd.DataFrame, path: Path) -> None:
         ax.legend(fontsize=6)
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def diagnosis_figures(tables: dict[str, pd.DataFrame], out_dir: Path, showcase_seeds=(),
+                      outcomes: bool = False) -> list[Path]:
+    """The figures of a ``diagnose`` study: ``discrepancy.png`` (a study of one run),
+    ``showcase/<case>.png`` (every run of the seeds ``showcase_seeds``; figures of runs no
+    longer shown are removed), ``study.png`` and ``power.png`` (``outcomes``: the ``cases`` table)."""
+    out_dir = Path(out_dir)
+    summary = tables.get("summary")
+    written: list[Path] = []
+    if summary is None or summary.empty:
+        return written
+    done = summary[summary["status"] == "completed"]
+    if len(summary) == 1 and len(done) == 1:
+        case_figure(_run_tables(tables, done["run_id"].iloc[0]), out_dir / "discrepancy.png")
+        written.append(out_dir / "discrepancy.png")
+    showcase = done[done["seed"].isin(list(showcase_seeds))]
+    folder = out_dir / "showcase"
+    names = showcase["case"].where(~showcase["case"].duplicated(keep=False),
+                                   showcase["case"] + "__" + showcase["run_id"].str[:8])  # fmt: skip
+    for run_id, name in zip(showcase["run_id"], names):
+        path = folder / f"{name}.png"
+        case_figure(_run_tables(tables, run_id), path)
+        written.append(path)
+    if folder.exists():  # figures of runs no longer shown
+        for stale in set(folder.glob("*.png")) - set(written):
+            stale.unlink()
+    if outcomes and tables.get("cases") is not None and not tables["cases"].empty:
+        study_figure(tables["cases"], out_dir / "study.png")
+        written.append(out_dir / "study.png")
+        power_figure(tables["cases"], out_dir / "power.png")
+        written.append(out_dir / "power.png")
+    return written
+
+
+def _run_tables(tables: dict, run_id: str) -> dict:
+    return {name: df[df["run_id"] == run_id] for name, df in tables.items() if "run_id" in df}
