@@ -84,7 +84,7 @@ def test_shape_noise_is_seeded_bounded_and_multiplicative():
     assert np.max(np.abs(rel)) <= 0.03 + 1e-12 and np.max(np.abs(rel)) > 0.02
     np.testing.assert_array_equal(a.frequencies_hz, clean.frequencies_hz)
     with pytest.raises(InputError, match="noise_fraction"):
-        damage.add_shape_noise(np.ones((2, 2)), -0.1, 0)
+        beam.measured("state1", -10.0, seed=7)
 
 
 def test_damage_index_and_false_detections():

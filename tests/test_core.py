@@ -15,7 +15,8 @@ from framework.optimizers.base import Termination
 from framework.optimizers.niching import derated
 from framework.structures.lab_frame.model import make_model, measured
 from framework.updating.evaluator import BudgetExhausted, Evaluator
-from framework.updating.objectives import FORMULATIONS, ObjectiveSpec, RatioConstraint
+from framework.updating.formulations import FORMULATIONS
+from framework.updating.objectives import ObjectiveSpec, RatioConstraint
 from framework.updating.problem import UpdatingProblem
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -272,7 +273,8 @@ def test_alpha_zero_without_shapes_is_rejected_by_the_problem():
 
 def test_every_formulation_validates_in_a_fresh_interpreter():
     code = (
-        "from framework.updating.objectives import FORMULATIONS, ObjectiveSpec\n"
+        "from framework.updating.formulations import FORMULATIONS\n"
+        "from framework.updating.objectives import ObjectiveSpec\n"
         "for name in FORMULATIONS:\n"
         "    assert ObjectiveSpec(formulation=name).formulation == name\n"
         "print(sorted(FORMULATIONS))\n"

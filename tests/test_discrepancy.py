@@ -8,15 +8,16 @@ import numpy as np
 import pytest
 
 from framework.core.errors import InputError
-from framework.diagnosis import likelihood
-from framework.diagnosis.calibrate import calibrate
+from framework.diagnosis.calibrate import calibrate, gaussian_spec
 from framework.diagnosis.generate import NOISE_LEVELS, HiddenCase, Noise, generate
 from framework.diagnosis.score import bic, rank
 from framework.diagnosis.tables import diagnosis_tables
 from framework.diagnosis.workflow import DiagnoseSettings, diagnose
+from framework.inference.noise import data_noise, with_stds
 from framework.measured.modes import MeasuredModes
 from framework.models.base import ModalResult
 from framework.structures.beam.effects import catalogue as beam_catalogue
+from framework.updating.formulations import gaussian
 
 FAST = DiagnoseSettings(n_starts=2, max_evaluations=200)
 
@@ -34,14 +35,14 @@ def test_residuals_zero_for_exact_model_and_weighted_mac_identity():
         frequency_std_hz=np.array([0.01, 0.02]),
         shape_std=np.full((3, 2), 0.01),
     )
-    spec = likelihood.objective_spec()
-    r, corr = likelihood.gaussian_residuals(_modes([2.0, 5.0], 3 * phi), measured, spec)
+    spec = gaussian_spec()
+    r, corr = gaussian.gaussian_residuals(_modes([2.0, 5.0], 3 * phi), measured, spec)
     assert r.shape == (2 + 6,)
     assert np.allclose(r, 0.0, atol=1e-12)
     # frequency residual is (f_a - f_e) / sigma; shape chi2 = ||e||^2 (1 - MAC) / s^2 for equal s
     a = phi.copy()
     a[2, 0] += 0.1
-    r, corr = likelihood.gaussian_residuals(_modes([2.02, 5.0], a), measured, spec)
+    r, corr = gaussian.gaussian_residuals(_modes([2.02, 5.0], a), measured, spec)
     assert r[0] == pytest.approx(2.0)
     chi_s = np.sum(r[2:5] ** 2)
     e = phi[:, 0]
@@ -50,25 +51,32 @@ def test_residuals_zero_for_exact_model_and_weighted_mac_identity():
 
 def test_unmatched_mode_costs_at_least_a_pair_at_the_matching_limit():
     phi = np.eye(3)[:, :2]
-    measured = likelihood.with_noise_model(MeasuredModes(np.array([2.0, 5.0]), ("a", "b", "c"), phi))
-    spec = likelihood.objective_spec(mac_threshold=0.5)
+    measured = MeasuredModes(np.array([2.0, 5.0]), ("a", "b", "c"), phi)  # no stds: 1 % and 5 % assumed
+    spec = gaussian_spec(mac_threshold=0.5)
     # model has only the first shape (twice): the second measured mode is unmatched
-    r, corr = likelihood.gaussian_residuals(
+    r, corr = gaussian.gaussian_residuals(
         _modes([2.0, 6.0], np.array([[1.0, 1.0], [0, 0.01], [0, 0]])), measured, spec
     )
     assert corr.matched.tolist() == [True, False]
     expected = (0.1 * 5.0 / (0.01 * 5.0)) ** 2 + 0.5 * 1.0 / 0.05**2
     assert r[1] ** 2 == pytest.approx(expected)
-    assert likelihood.n_data(measured, spec) == 2 + 2 * 2
+    assert gaussian.n_data(measured, spec) == 2 + 2 * 2
 
 
 def test_default_noise_model_and_bad_std():
     m = MeasuredModes(np.array([4.0]), ("a", "b"), np.array([[2.0], [1.0]]))
-    w = likelihood.with_noise_model(m)
+    noise = data_noise(m)
+    assert (noise.frequency_source, noise.shape_source) == ("assumed", "assumed")
+    assert noise.assumed == "frequency std 1 % of f; shape std 5 % of the peak"
+    w = with_stds(m, noise)
     assert w.frequency_std_hz[0] == pytest.approx(0.04)  # the stated assumption: 1 % of f
     assert np.allclose(w.shape_std, 0.10)  # 5 % of the largest component
-    with pytest.raises(InputError, match="frequency_std_hz and shape_std must be > 0"):
-        likelihood.with_noise_model(m, frequency_std_rel=0.0)
+    assert data_noise(w).assumed == "" and data_noise(w).frequency_source == "data"
+    with pytest.raises(InputError, match="noise.frequency_std_rel must be a number > 0"):
+        data_noise(m, frequency_std_rel=0.0)
+    zero = MeasuredModes(np.array([4.0]), ("a", "b"), np.array([[2.0], [1.0]]), frequency_std_hz=[0.0])
+    with pytest.raises(InputError, match="frequency_std_hz of mode 1 is 0"):
+        data_noise(zero)
 
 
 def test_bic_and_decisive_rule():
@@ -110,12 +118,10 @@ def test_calibration_recovers_truth_on_noise_free_beam():
     model = cat.model(active)
     truth = {"EI_ratio": 0.93, "support_fixity": 0.4}
     res = model.modal(truth)
-    measured = likelihood.with_noise_model(
-        MeasuredModes(
-            res.frequencies_hz[:5], res.dofs, res.shapes[:, :5], frequency_std_hz=1e-3 * res.frequencies_hz[:5]
-        ),
-        shape_std_rel=0.01,
+    exact = MeasuredModes(
+        res.frequencies_hz[:5], res.dofs, res.shapes[:, :5], frequency_std_hz=1e-3 * res.frequencies_hz[:5]
     )
+    measured = with_stds(exact, data_noise(exact, shape_std_rel=0.01))
     fit = calibrate(model, measured, n_starts=2, max_evaluations=300)
     assert fit.chi2 < 1e-6
     assert dict(zip(fit.parameters.names, fit.theta)) == pytest.approx(truth, rel=1e-4)

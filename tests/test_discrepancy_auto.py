@@ -19,11 +19,11 @@ pytest.importorskip("openseespy.opensees")
 
 from framework.core.errors import InputError  # noqa: E402
 from framework.diagnosis.auto import Block, _condensed_end, with_candidates  # noqa: E402
-from framework.diagnosis.evidence import laplace_log_evidence  # noqa: E402
 from framework.diagnosis.generate import NOISE_LEVELS, HiddenCase, generate  # noqa: E402
 from framework.diagnosis.outcomes import agreement, cases, targets  # noqa: E402
 from framework.diagnosis.tables import diagnosis_rows  # noqa: E402
 from framework.diagnosis.workflow import DiagnoseSettings, diagnose  # noqa: E402
+from framework.inference.evidence import laplace_log_evidence_chi2  # noqa: E402
 from framework.structures.frame_two_bay import model as frame_two_bay  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -136,8 +136,8 @@ def test_laplace_evidence_of_a_linear_gaussian_model_is_exact():
     like = np.exp(-0.5 * np.sum(((a[:, None] * grid - y[:, None]) / s) ** 2, axis=0))
     exact = math.log(np.trapezoid(like, grid) / 20.0)
     jac_x = (a / s)[:, None] * 20.0  # dr/dx with theta = -10 + 20 x
-    assert laplace_log_evidence(chi2, jac_x, np.array([20.0])) == pytest.approx(exact, abs=1e-6)
-    assert laplace_log_evidence(chi2, jac_x, np.array([20.0]), n_variants=4) == pytest.approx(exact - math.log(4))
+    assert laplace_log_evidence_chi2(chi2, jac_x, np.array([20.0])) == pytest.approx(exact, abs=1e-6)
+    assert laplace_log_evidence_chi2(chi2, jac_x, np.array([20.0]), n_variants=4) == pytest.approx(exact - math.log(4))
 
 
 def test_targets_and_agreement_tables():

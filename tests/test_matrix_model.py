@@ -14,14 +14,14 @@ from framework.measured.modes import MeasuredModes
 from framework.models.base import ModalResult, safe_modal
 from framework.models.matrix import LinearStiffness, MatrixModel, load_matrices, solve_condensation
 from framework.models.shear_building import make_shear_building
-from framework.updating.objectives import ObjectiveSpec
-from framework.updating.problem import UpdatingProblem
-from framework.updating.reference_formulation import (
-    FORMULATION,
+from framework.updating.formulations.reference import (
+    REFERENCE,
     normalize_at,
     reference_entries,
     reference_residuals,
 )
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.problem import UpdatingProblem
 
 
 def _params(n: int, lo: float = -0.5, hi: float = 0.5) -> ParameterSet:
@@ -229,7 +229,7 @@ def test_reference_residuals_by_hand():
     # unit weights: relative eigenvalue error
     r_unit, _ = reference_residuals(_result(f_a, phi_a), measured, ObjectiveSpec(options={"weights": "unit"}))
     np.testing.assert_allclose(r_unit[:2], (lam_e - lam_a) / lam_e, rtol=1e-12)
-    np.testing.assert_allclose(FORMULATION.split(r, measured, spec), [np.sum(r[:2] ** 2), np.sum(r[2:] ** 2)])
+    np.testing.assert_allclose(REFERENCE.split(r, measured, spec), [np.sum(r[:2] ** 2), np.sum(r[2:] ** 2)])
 
 
 def test_reference_forced_versus_mac_matching_on_swapped_modes():

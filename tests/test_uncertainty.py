@@ -40,8 +40,12 @@ def test_missing_standard_deviations_are_a_visible_assumption():
     model = make_structure("lab_frame_3dof")
     problem = UpdatingProblem(model, builtin_measured("lab_frame", "base"))
     noise = noise_model(problem)
-    assert "frequency std 0.5 % of f" in noise.assumed and "MAC residual" in noise.assumed
-    assert noise.scales[:3] == pytest.approx(np.full(3, 0.005))
+    assert noise.assumed == ("frequency std 1 % of f; shape std 5 % of the peak; "
+                             "MAC residual Gaussian with std (n_dof-1) s^2/2")
+    assert noise.sources == {"frequency": "assumed", "shape": "assumed"}
+    assert noise.scales[:3] == pytest.approx(np.full(3, 0.01))  # sqrt(alpha w) sigma_f / f
+    # the MAC rows: (n_dof - 1) s_rel^2 / 2 with s_rel = 5 % of the peak (3 DOFs)
+    assert noise.scales[3:] == pytest.approx(np.full(3, 2 * 0.05**2 / 2))
 
 
 def test_failed_evaluation_has_zero_likelihood():
@@ -156,7 +160,8 @@ def test_updating_run_reports_linearized_columns(tmp_path):
     assert (params["ci90_lower"] < params["value"]).all() and (params["value"] < params["ci90_upper"]).all()
     assert params.loc["kyy", "std"] == pytest.approx((params.loc["kyy", "ci90_upper"] - params.loc["kyy", "ci90_lower"])
                                                      / (2 * 1.6448536), rel=1e-6)
-    assert params["noise_assumed"].str.contains("frequency std 0.5 %").all()
+    assert params["noise_assumed"].str.contains("frequency std 1 % of f; shape std 5 % of the peak").all()
+    assert runs["noise_frequency_source"].iloc[0] == "assumed" and runs["noise_shape_source"].iloc[0] == "assumed"
     assert len(ident) == 6
     worst = ident.sort_values("singular_value").iloc[0]
     assert worst["dominant_parameter"] == "kxy" and worst["information_ratio"] > 1
@@ -166,7 +171,6 @@ def test_updating_run_reports_linearized_columns(tmp_path):
 def test_four_story_singular_values_name_alpha_4_least_determined():
     """SMU four-storey frame (skipped without the data): at the MAP point of the Gaussian
     likelihood the least-determined direction is alpha_4, with a std several times the others'."""
-    from framework.diagnosis.likelihood import objective_spec, with_noise_model
     from framework.inference.linearized import at_optimum
     from framework.structures.smu import model as smu
     from framework.study.kinds.posterior import map_point
@@ -174,7 +178,8 @@ def test_four_story_singular_values_name_alpha_4_least_determined():
     if not smu.available():
         pytest.skip(f"SMU data not found in {smu.smu_dir()}")
     model = smu.make_four_story(measured_floors=[1, 2, 3, 4], n_modes=4)
-    problem = UpdatingProblem(model, with_noise_model(smu.four_story_measured("base")), objective=objective_spec())
+    problem = UpdatingProblem(model, smu.four_story_measured("base"),
+                              objective=ObjectiveSpec(formulation="gaussian", failure_penalty=1e12))
     noise, prior = noise_model(problem), Prior(problem.parameters)
     x = map_point(problem, noise, prior, np.random.default_rng(0), 2)
     lin = at_optimum(problem, x, noise, prior)

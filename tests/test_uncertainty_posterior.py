@@ -111,7 +111,8 @@ def test_posterior_run_tables_on_the_lab_frame(tmp_path):
     t = _tables(tmp_path, "lab")
     run = t["runs"].iloc[0]
     assert run["status"] == "ok" and run["n_data"] == 9
-    assert "frequency std 0.5 % of f" in run["noise_assumed"]
+    assert run["noise_assumed"] == "frequency std 1 % of f; shape std 5 % of the peak"
+    assert run["noise_frequency_source"] == "assumed" and run["noise_shape_source"] == "assumed"
     p = t["parameters"].set_index("parameter")
     assert (p["ci90_lower"] < p["mean"]).all() and (p["mean"] < p["ci90_upper"]).all()
     assert (p["std_ratio"] > 0.3).all() and (p["std_ratio"] < 3).all()
@@ -145,10 +146,11 @@ def test_bad_sampler_settings_are_input_errors(tmp_path):
 @pytest.mark.parametrize("structure, measured, options", [("lab_frame_3dof", "lab_frame", {}),
                                                           ("beam", "beam", {"n_modes": 5})])
 def test_population_likelihood_equals_the_problems_residuals(structure, measured, options):
-    """The one-call Gaussian residuals of a population equal UpdatingProblem.evaluate's, point
-    by point, on measured and on simulated data, in process and through a process runner."""
+    """The Gaussian formulation's residuals of a population in one call (its batch path in
+    UpdatingProblem.evaluate) equal its point-by-point residuals, on measured and on simulated
+    data, in process and through a process runner; and the posterior's noise levels enter the
+    likelihood through the scales, whatever the whitening."""
     from framework.execution.parallel import make_evaluation_runner
-    from framework.inference.batch import gaussian_residuals_batch
     from framework.study.kinds.posterior import build
 
     for simulate in (None, {"frequency_std_rel": 0.005, "shape_std_rel": 0.02}):
@@ -158,10 +160,16 @@ def test_population_likelihood_equals_the_problems_residuals(structure, measured
                 "simulate": simulate}
         problem, noise, _, _ = build(task, np.random.default_rng(0))
         X = np.random.default_rng(1).random((12, problem.n_params))
-        expected = problem.evaluate(X).residuals
-        np.testing.assert_allclose(gaussian_residuals_batch(problem, X), expected, rtol=1e-10, atol=1e-12)
+        batch = problem.evaluate(X).residuals
+        points = np.vstack([problem.evaluate(x[None, :]).residuals for x in X])
+        np.testing.assert_allclose(batch, points, rtol=1e-10, atol=1e-12)
+        if simulate is None:  # no stds in the data: whitened at the default 1 %, the likelihood at 0.5 %
+            assert noise.scales[: problem.measured.n_modes] == pytest.approx(np.full(problem.measured.n_modes, 0.5))
+            assert noise.assumed.startswith("frequency std 0.5 % of f")
+        else:  # the simulated data carry their stds: the whitening is the likelihood's
+            assert noise.scales == pytest.approx(np.ones(problem.n_modal_residuals)) and noise.assumed == ""
     runner, close = make_evaluation_runner("processes", workers=2)
     try:
-        np.testing.assert_allclose(gaussian_residuals_batch(problem, X, runner), expected, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(problem.evaluate(X, runner).residuals, batch, rtol=1e-10, atol=1e-12)
     finally:
         close()

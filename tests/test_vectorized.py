@@ -8,7 +8,8 @@ import pytest
 
 from framework.models.arrays import ModalArrays, array_method
 from framework.structures.lab_frame.model import PARAMETERS, ThreeDofFrame, make_model, measured
-from framework.updating.objectives import ModeCorrelations, ObjectiveSpec, RatioConstraint
+from framework.updating.objectives import ObjectiveSpec, RatioConstraint
+from framework.updating.pairing import ModeCorrelations
 from framework.updating.problem import UpdatingProblem
 
 SPECS = [

@@ -4,7 +4,9 @@ L-curve corner for Tikhonov regularization, the two-state transform of two probl
 
 - Shape noise:    phi_jk,measured = phi_jk (1 + a eps_jk), eps_jk ~ U[-1, 1] drawn from
                   ``np.random.default_rng(seed)``, one draw (n_dof, m) per seed;
-                  frequencies are left noise-free (SPEC 7: noise only on shapes).
+                  frequencies are left noise-free (SPEC 7: noise only on shapes); the
+                  kind :class:`framework.inference.simulate.UniformShapeNoise` of the one
+                  simulator of noisy modes.
 - Damage index:   D_e = 1 - r_e / r_e,0 (relative loss of the element's I).
 - Detection:      element reported damaged when D_e > threshold; a false detection is an
                   element with no true damage reported damaged.
@@ -21,6 +23,8 @@ import numpy as np
 
 from framework.core.errors import InputError
 from framework.core.parameters import Parameter, ParameterSet
+from framework.inference.simulate import UniformShapeNoise
+from framework.inference.simulate import noisy_measurement as simulated
 from framework.measured.modes import MeasuredModes
 from framework.models.base import ModalResult
 from framework.updating.problem import Evaluations, as_points
@@ -33,38 +37,18 @@ DETECTION_THRESHOLD = 0.05
 
 
 # ---- simulated measurement ---------------------------------------------------------------
-def add_shape_noise(shapes: np.ndarray, noise_fraction: float, seed: int) -> np.ndarray:
-    """phi (1 + a eps), eps ~ U[-1, 1] of the shape of ``shapes``, from default_rng(seed)."""
-    if not np.isfinite(noise_fraction) or noise_fraction < 0:
-        raise InputError(f"noise_fraction must be a finite number >= 0, got {noise_fraction!r}")
-    shapes = np.asarray(shapes, dtype=float)
-    eps = np.random.default_rng(seed).uniform(-1.0, 1.0, size=shapes.shape)
-    return shapes * (1.0 + noise_fraction * eps)
-
-
 def noisy_measurement(
     modes: ModalResult, noise_fraction: float, seed: int, name: str = "simulated", n_modes: int | None = None
 ) -> MeasuredModes:
-    """MeasuredModes from model modes: exact frequencies, shapes with multiplicative noise.
-
-    Each shape is first scaled to unit maximum absolute value (positive largest entry) so
-    that the stored numbers do not depend on the solver's normalization.
-    """
+    """MeasuredModes from model modes (SPEC 7): exact frequencies, shapes scaled to a largest
+    component of +1 with multiplicative noise phi (1 + a eps), eps ~ U[-1, 1], a =
+    ``noise_fraction``, from ``np.random.default_rng(seed)`` (:mod:`framework.inference.simulate`)."""
     m = modes.n_modes if n_modes is None else int(n_modes)
     if not 1 <= m <= modes.n_modes:
         raise InputError(f"n_modes must be in [1, {modes.n_modes}], got {n_modes!r}")
-    shapes = modes.shapes[:, :m]
-    peak = shapes[np.argmax(np.abs(shapes), axis=0), np.arange(m)]
-    shapes = add_shape_noise(shapes / peak, noise_fraction, seed)
-    return MeasuredModes(
-        frequencies_hz=modes.frequencies_hz[:m].copy(),
-        dofs=modes.dofs,
-        shapes=shapes,
-        labels=tuple(f"bending {j + 1}" for j in range(m)),
-        name=name,
-        source=f"simulated:{name}",
-        meta={"noise_fraction": float(noise_fraction), "seed": int(seed)},
-    )
+    return simulated(modes.frequencies_hz[:m], modes.shapes[:, :m], modes.dofs, UniformShapeNoise(noise_fraction),
+                     np.random.default_rng(seed), labels=tuple(f"bending {j + 1}" for j in range(m)), name=name,
+                     source=f"simulated:{name}", meta={"noise_fraction": float(noise_fraction), "seed": int(seed)})
 
 
 # ---- damage index and detection -----------------------------------------------------------

@@ -1,6 +1,7 @@
 """Maximum-likelihood calibration of a model's parameters (multi-start least squares).
 
-Minimizes chi2(theta) = sum r(theta)^2 of :mod:`framework.diagnosis.likelihood` over the
+Minimizes chi2(theta) = sum r(theta)^2 of the ``gaussian`` formulation
+(:mod:`framework.updating.formulations.gaussian`, residuals whitened by the data's noise) over the
 box of the parameters with the framework's sensitivity method (``run_optimizer("sm")``,
 scipy least_squares trust-region on the whitened residual vector) from the initial point
 and ``n_starts - 1`` random starts (seeded), keeping the best. The least-squares minimum
@@ -16,14 +17,32 @@ import numpy as np
 
 from framework.core.errors import ModelEvaluationError
 from framework.core.parameters import ParameterSet
-from framework.diagnosis import likelihood
 from framework.measured.modes import MeasuredModes
 from framework.models.base import ModalResult, StructuralModel
 from framework.optimizers import Budget, run_optimizer
-from framework.updating.objectives import ModeCorrelation, ObjectiveSpec
+from framework.updating.formulations import gaussian
+from framework.updating.objectives import ObjectiveSpec
+from framework.updating.pairing import ModeCorrelation
 from framework.updating.problem import UpdatingProblem
 
 log = logging.getLogger(__name__)
+
+
+def gaussian_spec(
+    mac_threshold: float = 0.5,
+    frequency_window: float | None = None,
+    unmatched_window: float = gaussian.DEFAULT_UNMATCHED_WINDOW,
+    use_shapes: bool = True,
+) -> ObjectiveSpec:
+    """ObjectiveSpec selecting the Gaussian formulation; Pi = chi2 (failures cost 1e12)."""
+    return ObjectiveSpec(
+        formulation="gaussian",
+        mac_threshold=mac_threshold,
+        frequency_window=frequency_window,
+        use_shapes=use_shapes,
+        failure_penalty=1e12,
+        options={"unmatched_window": unmatched_window},
+    )
 
 
 @dataclass
@@ -81,7 +100,7 @@ def calibrate(
     Starts: the points ``x_starts`` (normalized; default: the parameters' initial
     values), then random points of the run's seeded generator up to ``n_starts``.
     """
-    spec = spec or likelihood.objective_spec()
+    spec = spec or gaussian_spec()
     problem = UpdatingProblem(model, measured, parameters, spec, name=label)
     params = problem.parameters
     budget = Budget(max_evaluations=max_evaluations, target_objective=None, stall_iterations=10)
@@ -115,7 +134,7 @@ def calibrate(
         residuals=ev.residuals[0],
         correlation=ev.correlations[0],
         modal=modal,
-        n_data=likelihood.n_data(measured, spec),
+        n_data=gaussian.n_data(measured, spec),
         n_evaluations=n_eval,
         start_chi2=starts,
     )

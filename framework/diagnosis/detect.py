@@ -1,8 +1,10 @@
 """Detect: is what remains after calibration explainable by measurement noise?
 
-With Gaussian noise of known sigma and a model that contains the truth, the calibrated
-chi2 follows (to first order) a chi-square distribution with n - k degrees of freedom
-(n data, k calibrated parameters). The discrepancy is *significant* when
+With Gaussian noise of known sigma (the data's standard deviations, else the assumed
+defaults of :mod:`framework.inference.noise`) and a model that contains the truth, the
+calibrated chi2 follows (to first order) a chi-square distribution with n - k degrees of
+freedom (n data, k calibrated parameters; :func:`framework.inference.noise.consistency_test`).
+The discrepancy is *significant* when
 
     p = P(chi2_{n-k} >= chi2_min) < alpha        (default alpha = 0.01)
 
@@ -22,9 +24,10 @@ import pandas as pd
 from scipy import stats
 
 from framework.core.correlation import comac
-from framework.diagnosis import likelihood
-from framework.diagnosis.calibrate import Fit
+from framework.diagnosis.calibrate import Fit, gaussian_spec
+from framework.inference.noise import consistency_test
 from framework.measured.modes import MeasuredModes
+from framework.updating.formulations import gaussian
 from framework.updating.objectives import ObjectiveSpec
 
 DEFAULT_ALPHA = 0.01
@@ -64,16 +67,15 @@ def detect(
     fit: Fit, measured: MeasuredModes, spec: ObjectiveSpec | None = None, alpha: float = DEFAULT_ALPHA
 ) -> Detection:
     """Test the calibrated residuals of ``fit`` against the noise model."""
-    spec = spec or likelihood.objective_spec()
-    dof = max(fit.n_data - fit.k, 1)
-    p = float(stats.chi2.sf(fit.chi2, dof))
+    spec = spec or gaussian_spec()
+    dof, p = consistency_test(fit.chi2, fit.n_data, fit.k)
     corr = fit.correlation
-    chi_f, chi_s = likelihood.per_mode_chi2(fit.residuals, measured, spec)
+    chi_f, chi_s = gaussian.per_mode_chi2(fit.residuals, measured, spec)
     m = measured.n_modes
     z = fit.residuals[:m].copy()
     z[~corr.matched] = np.nan
     shape_dof = max(len(measured.dofs) - 1, 1)
-    use_shapes = likelihood.uses_shapes(measured, spec)
+    use_shapes = gaussian.uses_shapes(measured, spec)
     modes = pd.DataFrame(
         {
             "mode": np.arange(1, m + 1),

@@ -9,12 +9,13 @@ From one ``np.random.default_rng(seed)``, in this order:
    and its parameter values (uniform over the effect's ``hidden_values`` ranges, scaled
    towards the null value by ``magnitude``, unless given);
 3. the truth model's modes; the modes a test would measure (``select_modes``);
-4. noise: f_e = f (1 + frequency_std_rel N(0, 1)); shapes normalized to a largest
-   component of 1, then phi_e = phi + shape_std_rel N(0, 1) per component.
+4. the Gaussian noise of :class:`framework.inference.simulate.Noise` (the one simulator of
+   noisy modes): shapes normalized to a largest component of +1, f_e = f (1 +
+   frequency_std_rel N(0, 1)), then phi_e = phi + shape_std_rel N(0, 1) per component.
 
-The returned :class:`MeasuredModes` carries ``frequency_std_hz = frequency_std_rel f``
+The returned :class:`MeasuredModes` carries ``frequency_std_hz = frequency_std_rel f_e``
 and ``shape_std = shape_std_rel`` (the noise actually used; none with ``with_stds=False``),
-and the truth in ``meta``.
+and the truth in ``meta``. Named levels: :data:`framework.inference.simulate.NOISE_LEVELS`.
 """
 
 from __future__ import annotations
@@ -26,29 +27,10 @@ import numpy as np
 
 from framework.core.errors import InputError
 from framework.diagnosis.effects import Catalogue
+from framework.inference.simulate import NOISE_LEVELS, Noise, noisy_measurement
 from framework.measured.modes import MeasuredModes
 
-
-@dataclass(frozen=True)
-class Noise:
-    """Measurement noise: relative frequency std and shape std (of the largest component)."""
-
-    frequency_std_rel: float = 0.002
-    shape_std_rel: float = 0.01
-    name: str = ""
-
-    def __post_init__(self) -> None:
-        for k in ("frequency_std_rel", "shape_std_rel"):
-            v = getattr(self, k)
-            if not (np.isfinite(v) and v > 0):
-                raise InputError(f"noise.{k} must be > 0, got {v!r}")
-
-
-NOISE_LEVELS = {
-    "low": Noise(0.002, 0.01, "low"),
-    "high": Noise(0.005, 0.03, "high"),
-    "very_high": Noise(0.01, 0.05, "very_high"),
-}
+__all__ = ["NOISE_LEVELS", "HiddenCase", "Noise", "generate"]
 
 
 @dataclass(frozen=True)
@@ -100,19 +82,16 @@ def generate(catalogue: Catalogue, case: HiddenCase, name: str = "") -> Measured
     result = model.modal(truth)
     idx = catalogue.modes_to_measure(result)
     f = result.frequencies_hz[idx]
-    phi = result.shapes[:, idx]
-    phi = phi / phi[np.argmax(np.abs(phi), axis=0), np.arange(phi.shape[1])]
     noise = case.noise
-    f_e = f * (1.0 + noise.frequency_std_rel * rng.standard_normal(f.size))
-    phi_e = phi + noise.shape_std_rel * rng.standard_normal(phi.shape)
     hidden_txt = ",".join(f"{k}[{v}]" if v else k for k, v in active.items()) or "none"
-    return MeasuredModes(
-        frequencies_hz=f_e,
-        dofs=result.dofs,
-        shapes=phi_e,
+    return noisy_measurement(
+        f,
+        result.shapes[:, idx],
+        result.dofs,
+        noise,
+        rng,
+        with_stds=case.with_stds,
         labels=_labels(catalogue, result, idx),
-        frequency_std_hz=noise.frequency_std_rel * f_e if case.with_stds else None,
-        shape_std=np.full(phi.shape, noise.shape_std_rel) if case.with_stds else None,
         name=name or f"{catalogue.structure}_{hidden_txt}_seed{case.seed}",
         source=f"generated: {catalogue.structure}, hidden {hidden_txt}, seed {case.seed}",
         meta={

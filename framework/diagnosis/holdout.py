@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from framework.diagnosis import likelihood
 from framework.diagnosis.calibrate import Fit, calibrate
 from framework.diagnosis.effects import Catalogue
 from framework.measured.modes import MeasuredModes
+from framework.updating.formulations import gaussian
 from framework.updating.objectives import ObjectiveSpec
 from framework.updating.problem import UpdatingProblem
 
@@ -41,6 +41,6 @@ def loo_chi2(
             max_evaluations=max_evaluations, label=f"{fit.label} without mode {j + 1}", active=fit.active,
         )  # fmt: skip
         ev = full.evaluate(params.to_normalized(f.theta)[None, :])
-        chi_f, chi_s = likelihood.per_mode_chi2(ev.residuals[0], measured, spec)
+        chi_f, chi_s = gaussian.per_mode_chi2(ev.residuals[0], measured, spec)
         out[j] = chi_f[j] + chi_s[j]
     return float(out.sum()), out

@@ -24,6 +24,9 @@ import pandas as pd
 from framework.diagnosis.calibrate import Fit
 
 DECISIVE_DELTA_BIC = 10.0
+#: 2 ln Bayes factor an effect must reach by the Laplace evidence against no change and the
+#: runner-up (Kass & Raftery 1995: very strong; the evidence's scale is that of -Delta BIC)
+DECISIVE_2LNB = 10.0
 NO_CHANGE = "none"
 
 

@@ -30,7 +30,7 @@ from framework.core.parameters import Parameter
 from framework.diagnosis.effects import Catalogue
 from framework.diagnosis.score import NO_CHANGE
 from framework.diagnosis.workflow import Diagnosis
-from framework.updating.objectives import correlation_table
+from framework.updating.pairing import correlation_table
 
 TABLES = ("summary", "rounds", "candidates", "modes", "parameters", "comac", "screen")
 

@@ -31,11 +31,12 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from framework.core.parameters import Parameter, ParameterSet
-from framework.diagnosis import likelihood
-from framework.diagnosis.calibrate import Fit, calibrate
+from framework.diagnosis.calibrate import Fit, calibrate, gaussian_spec
 from framework.diagnosis.detect import DEFAULT_ALPHA, Detection, detect
 from framework.diagnosis.effects import Catalogue
 from framework.diagnosis.score import DECISIVE_DELTA_BIC, NO_CHANGE, Ranking, rank
+from framework.inference.gaussian import DEFAULT_UNMATCHED_WINDOW
+from framework.inference.noise import DEFAULT_FREQUENCY_STD_REL, DEFAULT_SHAPE_STD_REL, data_noise, with_stds
 from framework.measured.modes import MeasuredModes
 
 log = logging.getLogger(__name__)
@@ -46,7 +47,8 @@ class DiagnoseSettings(BaseModel):
 
     alpha: level of the chi-square test; decisive_delta_bic: BIC margin to name an effect;
     n_starts / max_evaluations: least-squares starts and evaluations per start;
-    frequency_std_rel / shape_std_rel: noise defaults when the data give no std;
+    frequency_std_rel / shape_std_rel: the noise assumed where the data give no standard
+    deviation (default: the assumed defaults of :mod:`framework.inference.noise`, 1 % / 5 %);
     rank_always: rank the candidates in round 1 even when nothing is significant (the
     ranking is reported, nothing is named); holdout_modes: also score every candidate by
     leave-one-mode-out prediction (:mod:`.holdout`) and name an effect only when it also
@@ -67,10 +69,10 @@ class DiagnoseSettings(BaseModel):
     max_rounds: int = Field(2, ge=1)
     mac_threshold: float = Field(0.5, ge=0, le=1)
     frequency_window: float | None = Field(None, gt=0)
-    unmatched_window: float = Field(likelihood.DEFAULT_UNMATCHED_WINDOW, gt=0)
+    unmatched_window: float = Field(DEFAULT_UNMATCHED_WINDOW, gt=0)
     use_shapes: bool = True
-    frequency_std_rel: float = Field(likelihood.DEFAULT_FREQUENCY_STD_REL, gt=0)
-    shape_std_rel: float = Field(likelihood.DEFAULT_SHAPE_STD_REL, gt=0)
+    frequency_std_rel: float = Field(DEFAULT_FREQUENCY_STD_REL, gt=0)
+    shape_std_rel: float = Field(DEFAULT_SHAPE_STD_REL, gt=0)
     rank_always: bool = True
     holdout_modes: bool = False
     refine_starts: int = Field(3, ge=0)
@@ -80,7 +82,7 @@ class DiagnoseSettings(BaseModel):
     #: calibrate only the best ``screen_keep`` variants of an effect by the linearized
     #: screen of :mod:`.screen` (None: calibrate every variant)
     screen_keep: int | None = Field(None, ge=1)
-    #: also score every candidate by its Laplace model evidence (:mod:`.evidence`)
+    #: also score every candidate by its Laplace model evidence (:func:`_evidence`)
     evidence: bool = True
     #: a fitted parameter within this fraction of its range from a bound is flagged
     bound_tolerance: float = Field(0.02, ge=0, lt=0.5)
@@ -229,7 +231,7 @@ def _screened_starts(model, measured, params, x0, new, settings: DiagnoseSetting
 
 
 def spec_of(settings: DiagnoseSettings):
-    return likelihood.objective_spec(
+    return gaussian_spec(
         mac_threshold=settings.mac_threshold,
         frequency_window=settings.frequency_window,
         unmatched_window=settings.unmatched_window,
@@ -248,7 +250,8 @@ def diagnose(
     noise_source = noise_source_of(measured, settings)
     if noise_source != "data":
         log.warning("%s: %s", measured.name, noise_warning(noise_source))
-    data = likelihood.with_noise_model(measured, settings.frequency_std_rel, settings.shape_std_rel)
+    # the noise is fixed once: every calibration and test of this diagnosis whitens with it
+    data = with_stds(measured, data_noise(measured, settings.frequency_std_rel, settings.shape_std_rel))
     if not settings.use_shapes or not data.has_shapes:
         settings = settings.model_copy(update={"use_shapes": False})
     spec = spec_of(settings)
@@ -320,10 +323,11 @@ def diagnose(
 # ---- noise, screening, evidence, flags, verdict ------------------------------------------
 def noise_source_of(measured: MeasuredModes, settings: DiagnoseSettings) -> str:
     """"data" when the data carry the standard deviations the test needs, else the assumption."""
+    noise = data_noise(measured, settings.frequency_std_rel, settings.shape_std_rel, use_shapes=settings.use_shapes)
     missing = []
-    if measured.frequency_std_hz is None:
+    if noise.frequency_source == "assumed":
         missing.append(f"frequency std = {settings.frequency_std_rel:.2%} of f")
-    if settings.use_shapes and measured.has_shapes and measured.shape_std is None:
+    if noise.shape_source == "assumed":
         missing.append(f"shape std = {settings.shape_std_rel:.1%} of the largest component")
     return "data" if not missing else "assumed: " + ", ".join(missing)
 
@@ -366,9 +370,20 @@ def _screen(catalogue, active, name, eff, fit: Fit, data, settings, projector):
     return keep, rows, used
 
 
+#: step in x of the central differences of the evidence's Jacobian
+EVIDENCE_FD_STEP = 1e-3
+
+
 def _evidence(rnd: Round, catalogue: Catalogue, fit: Fit, candidates, data, settings) -> int:
-    """Laplace ln Z of no change and of every candidate's best fit into the ranking table."""
-    from framework.diagnosis.evidence import DECISIVE_2LNB, fd_jacobian, laplace_log_evidence
+    """Laplace ln Z (:func:`framework.inference.evidence.laplace_log_evidence_chi2`, uniform prior
+    on the box and over the V variants searched) of no change and of every candidate's best fit
+    into the ranking table; the Jacobian of the whitened residuals at each fit from
+    ``UpdatingProblem.jacobian`` (central differences: the Gaussian formulation has no exact
+    Jacobian). 2 (ln Z_1 - ln Z_0) is on the scale of -Delta BIC; an effect is decisive by the
+    evidence when it beats no change and the runner-up by ``DECISIVE_2LNB`` (Kass & Raftery:
+    very strong). A parameter at its bound (flagged) makes the approximation rough."""
+    from framework.diagnosis.score import DECISIVE_2LNB
+    from framework.inference.evidence import laplace_log_evidence_chi2
     from framework.updating.problem import UpdatingProblem
 
     fits = {NO_CHANGE: (fit, 1)} | candidates
@@ -377,10 +392,10 @@ def _evidence(rnd: Round, catalogue: Catalogue, fit: Fit, candidates, data, sett
         model = catalogue.model(f.active)
         problem = UpdatingProblem(model, data, parameters=f.parameters, objective=spec_of(settings))
         x = f.parameters.to_normalized(f.theta)
-        jac = fd_jacobian(problem, x)[: len(f.residuals)]
-        used += 2 * len(x)
+        jac = problem.jacobian(x, result=f.modal, fd_step=EVIDENCE_FD_STEP, scheme="central")
+        used += jac.cost
         spans = np.array([p.span for p in f.parameters])
-        log_z[name] = laplace_log_evidence(f.chi2, jac, spans, n_var)
+        log_z[name] = laplace_log_evidence_chi2(f.chi2, jac.J[: len(f.residuals)], spans, n_var)
     table = rnd.ranking.table
     table["log_evidence"] = table["effect"].map(log_z)
     table["two_ln_bayes_vs_none"] = 2 * (table["log_evidence"] - log_z[NO_CHANGE])

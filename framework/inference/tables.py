@@ -16,17 +16,20 @@ log = logging.getLogger(__name__)
 
 def linearized_columns(problem, x_best: np.ndarray, residuals: np.ndarray | None = None, runner=None) -> dict:
     """{"run": columns of the runs row, "parameters": one dict of columns per parameter,
-    "identifiability": rows}: chi2, n_data, Laplace ln Z; std, 90 % interval and the noise
-    assumption per parameter; singular directions."""
+    "identifiability": rows}: chi2, n_data, Laplace ln Z, where the data's standard deviations
+    came from (``noise_frequency_source``, ``noise_shape_source``: data / estimated / assumed,
+    "" for shapes not used); std, 90 % interval and the noise assumption per parameter;
+    singular directions."""
     k = problem.n_params
     nan_params = [{"std": np.nan, "ci90_lower": np.nan, "ci90_upper": np.nan, "noise_assumed": ""} for _ in range(k)]
     out = {"run": {"chi2": np.nan, "n_data": np.nan, "log_evidence_laplace": np.nan, "uq_jacobian": "",
-                   "uq_error": ""},
+                   "uq_error": "", "noise_frequency_source": "", "noise_shape_source": ""},
            "parameters": nan_params, "identifiability": []}
     try:
         noise = noise_model(problem)
         for row in nan_params:
             row["noise_assumed"] = noise.assumed
+        out["run"].update(noise_frequency_source=noise.sources["frequency"], noise_shape_source=noise.sources["shape"])
         if residuals is None:
             residuals = problem.residuals(x_best, runner)
         chi2 = float(noise.chi2(residuals)[0])

@@ -19,7 +19,7 @@ Vectorized models: on the in-process path (runner None or ``modal_many``) a mode
 ``modal_arrays`` (:mod:`framework.models.arrays`) solves the whole population in one call
 without a Python object per point; a population's residuals are computed in one call
 (``formulation.batch_residuals``) and its correlations kept as arrays
-(:class:`~framework.updating.objectives.ModeCorrelations`, one ModeCorrelation built when asked). A
+(:class:`~framework.updating.pairing.ModeCorrelations`, one ModeCorrelation built when asked). A
 runner's list of ModalResult goes through the same vectorized code, so every runner gives
 the same numbers.
 
@@ -54,18 +54,15 @@ from framework.core.parameters import ParameterSet
 from framework.measured.modes import MeasuredModes
 from framework.models.arrays import ModalArrays, array_method
 from framework.models.base import ModalResult, StructuralModel, modal_many
+from framework.updating.formulations import get_formulation
 from framework.updating.objectives import (
-    ModeCorrelation,
-    ModeCorrelations,
     ObjectiveSpec,
     check_constraints,
-    correlation_table,
-    get_formulation,
     n_penalty_residuals,
     penalty_jacobian,
     penalty_residuals,
-    use_shape_term,
 )
+from framework.updating.pairing import ModeCorrelation, ModeCorrelations, correlation_table, use_shape_term
 
 log = logging.getLogger(__name__)
 
@@ -151,12 +148,13 @@ class UpdatingProblem:
                     f"{measured.source}: measured DOF(s) {unknown} are not DOFs of model {self.name!r}; "
                     f"model DOFs: {list(model.dofs)[:20]}"
                 )
-        weighted = self.spec.formulation in ("spec", "reference")  # formulations that use alpha and beta
-        if weighted and self.spec.alpha == 0 and not use_shape_term(measured, self.spec):
+        if self.formulation.uses_weights and self.spec.alpha == 0 and not use_shape_term(measured, self.spec):
             raise InputError(
                 f"objective.alpha is 0 and there is no MAC term ({measured.source} has no shapes or "
                 "use_shapes is false): the objective would be identically 0"
             )
+        if self.formulation.check_data is not None:
+            self.formulation.check_data(measured, self.spec)
         self.n_modal_residuals = self.formulation.n_residuals(measured, self.spec)
         self.n_residuals = self.n_modal_residuals + n_penalty_residuals(self.parameters, self.spec)
         self._frozen = True
@@ -339,14 +337,20 @@ class UpdatingProblem:
         *,
         fd_step: float = 1e-3,
         fallback: bool = True,
+        scheme: str = "forward",
     ) -> Jacobian:
         """Jacobian dr/dx (r, k) of the residual vector at the normalized point x (module docstring).
 
         result: the model's ModalResult at x if known (else the model is evaluated here, not
-        counted in ``Jacobian.cost``); fd_step: step in x of the forward differences of the
-        fallback; fallback=False: return a Jacobian with J None and the reason instead of
-        evaluating the difference points (the caller, e.g. a counting Evaluator, does it).
+        counted in ``Jacobian.cost``); fd_step: step in x of the finite differences of the
+        fallback; scheme: "forward" (k difference points, backward at the upper bound) or
+        "central" (2k points x -+ fd_step e_j clipped to [0, 1], one-sided at a bound:
+        second-order accurate in the interior); fallback=False: return a Jacobian with J None
+        and the reason instead of evaluating the difference points (the caller, e.g. a counting
+        Evaluator, does it).
         """
+        if scheme not in ("forward", "central"):
+            raise ValueError(f"jacobian scheme must be 'forward' or 'central', got {scheme!r}")
         x = as_points(np.asarray(x, float)[None, :], self.n_params)[0]
         theta = self.parameters.to_physical(x)
         if result is None:
@@ -373,6 +377,14 @@ class UpdatingProblem:
             reason = "no_derivatives"
         if not fallback:
             return Jacobian(None, "fd", 0, reason)
+        if scheme == "central":
+            lo, hi = np.clip(x - fd_step, 0.0, 1.0), np.clip(x + fd_step, 0.0, 1.0)
+            X = np.repeat(x[None, :], 2 * x.size, axis=0)
+            X[0::2][np.arange(x.size), np.arange(x.size)] = lo
+            X[1::2][np.arange(x.size), np.arange(x.size)] = hi
+            ev = self.evaluate(X, runner)
+            J = (ev.residuals[1::2] - ev.residuals[0::2]).T / np.maximum(hi - lo, 1e-12)[None, :]
+            return Jacobian(J, "fd", len(X), reason, fd_evaluations=ev)
         X, h = fd_points(x, fd_step)
         ev = self.evaluate(X, runner)
         r0 = np.r_[modal_r, penalty_residuals(theta, x, self.parameters, self.spec)[0]]

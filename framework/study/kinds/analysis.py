@@ -266,7 +266,7 @@ def sensitivity_rows(result, theta: np.ndarray, f0: np.ndarray, rel_step: float)
 
 def mode_rows(problem, theta: np.ndarray, pairings: list[str], runner=None) -> tuple[list[dict], int]:
     """Mode rows of one case at theta for each pairing, and the model evaluations spent."""
-    from framework.updating.objectives import correlation_table
+    from framework.updating.pairing import correlation_table
 
     measured = problem.measured
     result = _modal(problem.model, problem.parameters.as_dict(theta), runner)

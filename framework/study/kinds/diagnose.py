@@ -267,7 +267,8 @@ def input_key(spec: dict) -> str:
 
 
 def _check_task(task: dict) -> None:
-    from framework.diagnosis import likelihood
+    from framework.diagnosis.calibrate import gaussian_spec
+    from framework.inference.noise import data_noise, with_stds
     from framework.updating.problem import UpdatingProblem
 
     catalogue = catalogue_of(task)
@@ -283,8 +284,8 @@ def _check_task(task: dict) -> None:
                              f"known: {sorted(known)}")  # fmt: skip
         noise_of(gen)
         return
-    measured = likelihood.with_noise_model(measured_of(task["measured"], catalogue))
-    UpdatingProblem(catalogue.model(start), measured, objective=likelihood.objective_spec())
+    measured = measured_of(task["measured"], catalogue)
+    UpdatingProblem(catalogue.model(start), with_stds(measured, data_noise(measured)), objective=gaussian_spec())
 
 
 # ---- one run -----------------------------------------------------------------------------

@@ -1,9 +1,10 @@
 """Run kind ``posterior``: the sampled posterior of an updating problem's parameters.
 
 One run: the problem of :mod:`framework.study.kinds.updating` (structure, measured data or data
-simulated from a truth drawn from the prior, parameters, objective; by default the Gaussian
-formulation of :mod:`framework.diagnosis.likelihood`), its likelihood and prior
-(:mod:`framework.inference.likelihood`), then
+simulated from a truth drawn from the prior, parameters, objective; by default the ``gaussian``
+formulation of :mod:`framework.updating.formulations`), its likelihood and prior
+(:mod:`framework.inference.likelihood`; the data's standard deviations, else the ``noise``
+levels, by default the assumed defaults of :mod:`framework.inference.noise`), then
 
 1. the MAP point by least squares on the whitened residuals (bounded, from the initial point
    and ``map_starts - 1`` prior draws) and the linearized posterior there;
@@ -17,8 +18,9 @@ Every random draw comes from ``np.random.default_rng(seed)`` of the run. Tables:
 
 - ``runs``: structure, sampler settings, n_evaluations, acceptance, min_ess, max_rhat, chi2
   and n_data at the MAP point, log_evidence_laplace, log_evidence_nested (+ _error),
-  noise_assumed, simulated, wall_s, status ("ok"; "error" with the message when the MAP point,
-  the sampler or the evidence raised; :class:`framework.core.status.Status`), error;
+  noise_assumed, noise_frequency_source, noise_shape_source (data / estimated / assumed),
+  simulated, wall_s, status ("ok"; "error" with the message when the MAP point, the sampler or
+  the evidence raised; :class:`framework.core.status.Status`), error;
 - ``parameters``: run x parameter: unit, lower, upper, truth (simulated data), map, lin_std,
   lin_ci90_lower/upper, mean, std, median, ci90_lower/upper (5 % / 95 % quantiles), ess,
   rhat, mean_shift_std = (mean - map) / std, std_ratio = lin_std / std, covered_sampled,
@@ -34,7 +36,6 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import replace
 from pathlib import Path
 from typing import Literal
 
@@ -43,6 +44,7 @@ from pydantic import Field, StrictInt
 
 from framework.core.errors import InputError
 from framework.core.status import Status
+from framework.inference.noise import DEFAULT_FREQUENCY_STD_REL, DEFAULT_SHAPE_STD_REL
 from framework.study.kinds import updating
 from framework.study.kinds.base import Kind, failure
 from framework.study.schema import Strict, StudyHeader
@@ -55,14 +57,16 @@ TABLES = ("runs", "parameters", "predictive", "identifiability", "draws")
 
 # ---- schema ------------------------------------------------------------------------------
 class NoiseConfig(Strict):
-    """Standard deviations assumed where the data give none (and named in ``noise_assumed``)."""
+    """Standard deviations assumed where the data give none (and named in ``noise_assumed``);
+    default: the assumed defaults of :mod:`framework.inference.noise`."""
 
-    frequency_std_rel: float = Field(0.005, gt=0, lt=1, strict=False)
-    shape_std_rel: float = Field(0.02, gt=0, lt=10, strict=False)
+    frequency_std_rel: float = Field(DEFAULT_FREQUENCY_STD_REL, gt=0, lt=1, strict=False)
+    shape_std_rel: float = Field(DEFAULT_SHAPE_STD_REL, gt=0, lt=10, strict=False)
 
 
 class SimulateConfig(NoiseConfig):
-    """Simulated data: truth from the prior, noise of these relative standard deviations."""
+    """Simulated data: truth from the prior, Gaussian noise of these relative standard deviations
+    (:class:`framework.inference.simulate.Noise`); the data carry them."""
 
 
 class PriorConfig(Strict):
@@ -122,26 +126,11 @@ def plan_runs(cfg: Config, sweep_values: dict) -> list[dict]:
 
 
 # ---- problem -----------------------------------------------------------------------------
-def _with_noise(measured, task: dict):
-    """The data with standard deviations filled where absent (gaussian formulation), and the
-    text naming what was assumed."""
-    from framework.diagnosis.likelihood import with_noise_model
-
-    noise = task["noise"]
-    assumed = []
-    if measured.frequency_std_hz is None:
-        assumed.append(f"frequency std {100 * noise['frequency_std_rel']:g} % of f")
-    if measured.has_shapes and measured.shape_std is None and task["objective"].get("use_shapes", True):
-        assumed.append(f"shape std {100 * noise['shape_std_rel']:g} % of the peak")
-    if task["objective"]["formulation"] != "gaussian":
-        return measured, None
-    return with_noise_model(measured, noise["frequency_std_rel"], noise["shape_std_rel"]), "; ".join(assumed)
-
-
 def build(task: dict, rng: np.random.Generator, structure_options=None, measured_cfg=None, simulated=None):
     """(problem, noise model, prior, truth or None) of the task (or of a validation case)."""
     from framework.inference.likelihood import Prior, noise_model
-    from framework.inference.simulate import simulate
+    from framework.inference.noise import data_noise
+    from framework.inference.simulate import Noise, simulate
     from framework.structures.registry import make_structure
     from framework.updating.problem import UpdatingProblem
 
@@ -155,13 +144,12 @@ def build(task: dict, rng: np.random.Generator, structure_options=None, measured
         truth, measured = simulated
     elif task.get("simulate") and measured_cfg is None:
         sim = task["simulate"]
-        truth, measured = simulate(model, params, measured, prior, rng, sim["frequency_std_rel"],
-                                   sim["shape_std_rel"])
-    measured, assumed = _with_noise(measured, task)
+        truth, measured = simulate(model, params, measured, prior, rng,
+                                   Noise(sim["frequency_std_rel"], sim["shape_std_rel"]))
     problem = UpdatingProblem(model, measured, params, updating.objective_from(task["objective"]))
-    noise = noise_model(problem, task["noise"]["frequency_std_rel"], task["noise"]["shape_std_rel"])
-    if assumed is not None:
-        noise = replace(noise, assumed=assumed)
+    levels = task["noise"]
+    noise = noise_model(problem, data_noise(measured, levels["frequency_std_rel"], levels["shape_std_rel"],
+                                            use_shapes=problem.spec.use_shapes))
     return problem, noise, prior, truth
 
 
@@ -243,7 +231,8 @@ def run(spec: dict, runner) -> dict[str, list[dict]]:
     log_prob = log_posterior_x(problem, noise, prior, runner)
     s, e = task["sampler"], task["evidence"]
     row = {"n_walkers": s["walkers"], "n_steps": s["steps"], "burn": s["burn"], "evidence_sampler": e["name"],
-           "noise_assumed": noise.assumed, "simulated": truth is not None, "n_data": noise.n_data,
+           "noise_assumed": noise.assumed, "noise_frequency_source": noise.sources["frequency"],
+           "noise_shape_source": noise.sources["shape"], "simulated": truth is not None, "n_data": noise.n_data,
            "status": Status.OK, "error": ""}
     try:
         x_map = map_point(problem, noise, prior, rng, task["map_starts"], runner)
@@ -298,10 +287,10 @@ def run(spec: dict, runner) -> dict[str, list[dict]]:
 
 
 def _log_likelihood_x(problem, noise, runner):
-    from framework.inference.batch import log_likelihood_batch
+    from framework.inference.likelihood import log_likelihood
 
     def log_like(X):
-        return log_likelihood_batch(problem, noise, np.atleast_2d(X), runner)
+        return log_likelihood(problem, noise, np.atleast_2d(X), runner)
 
     return log_like
 
@@ -325,23 +314,22 @@ def _predictive(task, problem, noise, draws, theta_map, rng, runner) -> list[dic
         return []
     thetas = draws[rng.choice(len(draws), size=n, replace=False)]
     names = problem.parameters.names
-    cases = [("base", problem)]
+    cases = [("base", problem, noise)]
     for case in task.get("validation", []):
         try:
-            vp, _, _, _ = build(task, rng, case["structure_options"], case["measured"])
-            cases.append((case["case"], vp))
+            vp, vn, _, _ = build(task, rng, case["structure_options"], case["measured"])
+            cases.append((case["case"], vp, vn))
         except Exception as exc:  # a failed prediction is a row
             log.debug("validation case %s failed: %s", case["case"], exc)
     rows = []
-    for name, prob in cases:
+    for name, prob, case_noise in cases:
         if prob.parameters.names != names:
             raise InputError(f"validation case {name!r}: its parameters differ from the problem's")
         X = prob.parameters.to_normalized(np.vstack([theta_map, thetas]))
         f = paired_frequencies(prob, X, runner)
         f_map, f = f[0], f[1:]
         m = prob.measured
-        sigma = m.frequency_std_hz if m.frequency_std_hz is not None else \
-            task["noise"]["frequency_std_rel"] * m.frequencies_hz
+        sigma = case_noise.data.frequency_std_hz
         noisy = f + sigma * rng.standard_normal(f.shape)
         for j in range(m.n_modes):
             ok = np.isfinite(f[:, j])

@@ -21,8 +21,10 @@ cases with the updated values. Tables:
 
 The linearized uncertainty at the optimum (:mod:`framework.inference.tables`, one Jacobian
 per run, never fatal) adds ``chi2``, ``n_data``, ``log_evidence_laplace``, ``uq_jacobian``,
-``uq_error`` to ``runs`` and ``std``, ``ci90_lower``, ``ci90_upper`` (physical units),
-``noise_assumed`` to ``parameters``.
+``uq_error``, ``noise_frequency_source``, ``noise_shape_source`` (where the data's standard
+deviations came from: data / estimated / assumed, :mod:`framework.inference.noise`) to ``runs``
+and ``std``, ``ci90_lower``, ``ci90_upper`` (physical units), ``noise_assumed`` to
+``parameters``.
 """
 
 from __future__ import annotations
@@ -256,7 +258,7 @@ def effective_objective(objective: dict) -> dict:
     """The objective section as it acts: a formulation that reads no options (``spec``) gets none,
     so that a study sweeping the formulation and another formulation's options (e.g.
     ``objective.options.shape_term``) plans each of its runs once (equal tasks, one run id)."""
-    from framework.updating.objectives import get_formulation
+    from framework.updating.formulations import get_formulation
 
     if objective.get("options") and get_formulation(objective["formulation"]).check_options is None:
         return {**objective, "options": {}}

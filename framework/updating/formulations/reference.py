@@ -48,9 +48,19 @@ Options (``ObjectiveSpec.options``):
   A simulated shape that is exactly 0 at q_i fails the evaluation ("zero_reference_entry").
   The objective vector stays [Pi_lambda, Pi_MAC], the second being the shape term either way.
 
+Residuals and data noise (:func:`reference_residual_std`, first order in the noise): an
+eigenvalue row has s = sqrt(alpha w_f,i) w_lambda,i 2 sigma_f,i / f_e,i (1 with ``weights:
+std`` when the data's standard deviations are the noise's); an eigenvector row
+s = sqrt(beta w_s,i) w_psi,i,d sigma_psi(d) with sigma_psi(d)^2 = (sigma_phi(d, i)^2 +
+psi_e(d)^2 sigma_phi(q_i, i)^2) / phi_e(q_i)^2 (the noise of the entry and of the reference
+entry; the latter is 0 when the data give the normalised entry a standard deviation of 0, as
+the SMU footbridge does); a MAC row as in the SPEC formulation,
+s = sqrt(beta w_s,i) w_psi,i (n_dof - 1) s_rel^2 / 2 (taken as Gaussian, named in
+``noise_assumed``).
+
 Exact Jacobians (:func:`reference_jacobian`, pairing held fixed, unmatched modes zero rows):
 dr_lambda,i = -w_lambda,i dlambda_a,j / lambda_e,i; the MAC term as in
-:func:`framework.updating.objectives.spec_jacobian`; dr_psi,i,d = -sqrt(beta w_s,i) w_psi,i,d
+:func:`framework.updating.formulations.spec.spec_jacobian`; dr_psi,i,d = -sqrt(beta w_s,i) w_psi,i,d
 (dphi_a(d) - psi_a(d) dphi_a(q_i)) / phi_a(q_i).
 """
 
@@ -64,14 +74,13 @@ from framework.core.correlation import pair_modes
 from framework.core.errors import InputError, ModelEvaluationError
 from framework.measured.modes import MeasuredModes
 from framework.models.base import ModalResult
-from framework.updating.objectives import (
-    Formulation,
+from framework.updating.formulations.base import Formulation, ResidualStd
+from framework.updating.formulations.spec import spec_n_residuals
+from framework.updating.pairing import (
     ModeCorrelation,
-    ObjectiveSpec,
     mac_derivative,
     measured_rows,
     shape_term_derivative,
-    spec_n_residuals,
     use_shape_term,
 )
 
@@ -98,12 +107,12 @@ def check_options(options: dict) -> None:
                          f"got {options['eigenvector_weights']!r}")
 
 
-def _options(spec: ObjectiveSpec) -> tuple[str, str]:
+def _options(spec) -> tuple[str, str]:
     opts = spec.options or {}
     return opts.get("matching", "order"), opts.get("weights", "std")
 
 
-def _eigenvector_term(spec: ObjectiveSpec) -> bool:
+def _eigenvector_term(spec) -> bool:
     return (spec.options or {}).get("shape_term", "mac") == "eigenvector"
 
 
@@ -194,14 +203,14 @@ def entry_weights(measured: MeasuredModes, weights: str, scheme: str = "entry") 
     return 1.0 / (n_dof * std)
 
 
-def _eigenvector_weights(measured: MeasuredModes, spec: ObjectiveSpec) -> np.ndarray:
+def _eigenvector_weights(measured: MeasuredModes, spec) -> np.ndarray:
     """w_psi,i,d sqrt(beta w_s,i) (n_dof, m) for the spec's options."""
     _, weights = _options(spec)
     scheme = (spec.options or {}).get("eigenvector_weights", "entry")
     return entry_weights(measured, weights, scheme) * np.sqrt(spec.beta * measured.w_shape)[None, :]
 
 
-def _pairing(result: ModalResult, measured: MeasuredModes, spec: ObjectiveSpec):
+def _pairing(result: ModalResult, measured: MeasuredModes, spec):
     matching, _ = _options(spec)
     phi_a = result.at(measured.dofs) if measured.has_shapes else None
     return phi_a, pair_modes(
@@ -215,7 +224,7 @@ def _pairing(result: ModalResult, measured: MeasuredModes, spec: ObjectiveSpec):
     )
 
 
-def reference_residuals(result: ModalResult, measured: MeasuredModes, spec: ObjectiveSpec):
+def reference_residuals(result: ModalResult, measured: MeasuredModes, spec):
     """Residual vector [r_lambda (m), shape terms] and the correlation it used."""
     _, weights = _options(spec)
     shapes = use_shape_term(measured, spec)
@@ -242,7 +251,7 @@ def reference_residuals(result: ModalResult, measured: MeasuredModes, spec: Obje
     return np.concatenate([r_lam, r_psi]), corr
 
 
-def _eigenvector_residuals(phi_a, corr: ModeCorrelation, measured: MeasuredModes, spec: ObjectiveSpec,
+def _eigenvector_residuals(phi_a, corr: ModeCorrelation, measured: MeasuredModes, spec,
                            unmatched: float) -> np.ndarray:
     """Shape-entry differences (psi_e - psi_a) without the reference entries, mode after mode."""
     n_dof, m = len(measured.dofs), measured.n_modes
@@ -263,7 +272,7 @@ def _eigenvector_residuals(phi_a, corr: ModeCorrelation, measured: MeasuredModes
 
 
 def reference_jacobian(result: ModalResult, derivatives, corr: ModeCorrelation, measured: MeasuredModes,
-                       spec: ObjectiveSpec) -> np.ndarray:
+                       spec) -> np.ndarray:
     """d r / d theta (r, k) of :func:`reference_residuals` with the pairing held fixed (module docstring)."""
     _, weights = _options(spec)
     m = measured.n_modes
@@ -299,7 +308,7 @@ def reference_jacobian(result: ModalResult, derivatives, corr: ModeCorrelation, 
     return J
 
 
-def reference_n_residuals(measured: MeasuredModes, spec: ObjectiveSpec) -> int:
+def reference_n_residuals(measured: MeasuredModes, spec) -> int:
     """m eigenvalue terms, plus m MAC terms or m (n_dof - 1) eigenvector terms.
 
     Called when the problem is built, so unusable eigenvector weights (a zero standard
@@ -310,18 +319,59 @@ def reference_n_residuals(measured: MeasuredModes, spec: ObjectiveSpec) -> int:
     return spec_n_residuals(measured, spec)
 
 
-def reference_split(residuals: np.ndarray, measured: MeasuredModes, spec: ObjectiveSpec) -> np.ndarray:
+def reference_split(residuals: np.ndarray, measured: MeasuredModes, spec) -> np.ndarray:
     """Objective vector [Pi_lambda, Pi_shape]: eigenvalue terms, then every shape term (MAC or eigenvector)."""
     m = measured.n_modes
     r2 = np.asarray(residuals) ** 2
     return np.stack([r2[..., :m].sum(-1), r2[..., m:].sum(-1)], axis=-1)
 
 
-FORMULATION = Formulation(
+def reference_residual_std(measured: MeasuredModes, spec, noise) -> ResidualStd:
+    """Standard deviations of the reference residuals given the data's noise (module docstring)."""
+    _, weights = _options(spec)
+    m = measured.n_modes
+    f = measured.frequencies_hz
+    f_std = np.asarray(noise.frequency_std_hz, float)
+    w_lam = eigenvalue_weights(measured, weights) * np.sqrt(spec.alpha * measured.w_frequency)
+    scales = [w_lam * 2.0 * f_std / f]
+    data_std = [f_std]
+    assumption = ""
+    shapes = use_shape_term(measured, spec)
+    if shapes and _eigenvector_term(spec):
+        q = reference_entries(measured.shapes)
+        w = entry_weights(measured, weights) * np.sqrt(spec.beta * measured.w_shape)[None, :]
+        # psi(d) = phi(d) / phi(q): d psi(d) = (d phi(d) - psi(d) d phi(q)) / phi(q)
+        s_phi = np.asarray(noise.shape_std, float)
+        ref, cols = measured.shapes[q, np.arange(m)], np.arange(m)
+        psi = measured.shapes / ref[None, :]
+        s_psi = np.sqrt(s_phi**2 + (psi * s_phi[q, cols][None, :]) ** 2) / np.abs(ref)[None, :]
+        keep = [np.delete(np.arange(len(measured.dofs)), q[i]) for i in range(m)]
+        scales += [w[keep[i], i] * s_psi[keep[i], i] for i in range(m)]
+        data_std += [s_psi[keep[i], i] for i in range(m)]
+    elif shapes:
+        n_dof = len(measured.dofs)
+        peak = np.max(np.abs(measured.shapes), axis=0)
+        s_rel = np.sqrt(np.mean((np.asarray(noise.shape_std, float) / peak) ** 2, axis=0))
+        w_psi = shape_weights(measured, weights) * np.sqrt(spec.beta * measured.w_shape)
+        s_mac = w_psi * max(n_dof - 1, 1) * s_rel**2 / 2.0
+        scales.append(s_mac)
+        data_std.append(s_mac)
+        assumption = "MAC residual Gaussian with std (n_dof-1) s^2/2"
+    scales, data_std = np.concatenate(scales), np.concatenate(data_std)
+    if np.any(scales <= 0):
+        raise InputError("likelihood: a residual of the reference formulation has zero weight or a zero shape "
+                         "standard deviation; its standard deviation would be 0")
+    n_data = m + (m * (len(measured.dofs) - 1) if shapes and _eigenvector_term(spec) else (m if shapes else 0))
+    return ResidualStd(scales, data_std, n_data, assumption, shapes)
+
+
+REFERENCE = Formulation(
+    "reference",
     reference_residuals,
     reference_n_residuals,  # [eigenvalue terms, shape terms]
     reference_split,
     objective_names=("Pi_lambda", "Pi_MAC"),  # the second is the shape term (MAC or eigenvector differences)
     check_options=check_options,
     jacobian=reference_jacobian,
+    residual_std=reference_residual_std,
 )
