@@ -7,8 +7,11 @@ initial values) and ``updated`` (that run's parameters), on that run's structure
 measured data; a study comparing structures gets them for the best run of each (column
 ``model``: the structure's name). An ``analysis`` study gets them at each of its points (the
 variant with the most successful points, per structure). A ``damage`` study (the beam) gets
-them per damaged state for its best estimate (:func:`damage_problems`). Other kinds get none. The figures
-are drawn from the written tables only (:mod:`framework.report.figures`), so ``gomu report`` needs no model.
+them per damaged state for its best estimate (:func:`damage_problems`). Other kinds get none. The
+model's geometry comes from the structure's descriptor (its ``geometry`` hook, else the model's
+own ``geometry`` method or OpenSees domain, :mod:`framework.models.geometry`): a user's
+``module:function`` model takes the same path as a built-in. The figures are drawn from the
+written tables only (:mod:`framework.report.figures`), so ``gomu report`` needs no model.
 
 A failure here (a model that cannot be built, say) is logged and leaves the study's tables
 untouched.
@@ -124,16 +127,17 @@ def write_shape_tables(out: Path, tables: dict[str, pd.DataFrame], cfg) -> list[
     if cfg.kind not in KINDS:
         return []
     from framework.study.kinds.updating import build_problem
+    from framework.study.structure_hooks import geometry_of
 
     try:
         parts: dict[str, list[pd.DataFrame]] = {name: [] for name in TABLES}
         if cfg.kind == "damage":
-            found = damage_problems(cfg, tables)
+            found = [(name, problem, states, None) for name, problem, states in damage_problems(cfg, tables)]
         else:
-            found = [(task["structure"]["name"], build_problem(task), states)
+            found = [(task["structure"]["name"], build_problem(task), states, geometry_of(task["structure"]["name"]))
                      for task, states in shape_states(cfg, tables)]
-        for model, problem, states in found:
-            shapes = shape_tables(problem, states, structure=model)
+        for model, problem, states, geometry in found:
+            shapes = shape_tables(problem, states, structure=model, geometry=geometry)
             for name in TABLES:
                 parts[name].append(shapes[name].assign(model=model) if not shapes[name].empty else shapes[name])
         if not parts["mac_matrix"]:

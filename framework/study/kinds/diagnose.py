@@ -7,7 +7,7 @@ Example (one diagnosis; ``gomu diagnose`` or ``gomu run``)::
 
     study: lab_two_effects
     kind: diagnose
-    structure: lab_frame              # a catalogue: beam, lab_frame, bridge, or module:function
+    structure: lab_frame              # a catalogue: beam, lab_frame, bridge, frame_two_bay, or module:function
     measured:                         # exactly one of file / builtin / generate
       generate: {hidden: {semi_rigid_joints: null, sensor_mass_eccentricity: null}, noise: high}
     seed: 2                           # the data's seed when generate gives none
@@ -58,10 +58,11 @@ from pydantic import (
 from framework.core.errors import InputError, ModelEvaluationError
 from framework.diagnosis.auto import with_candidates
 from framework.diagnosis.config import MeasuredSource, data_seed, measured_of, noise_of, source_kind
-from framework.diagnosis.effects import Catalogue, get_catalogue
+from framework.diagnosis.effects import Catalogue
 from framework.diagnosis.score import NO_CHANGE
 from framework.diagnosis.tables import TABLES, diagnosis_rows
 from framework.diagnosis.workflow import DiagnoseSettings, diagnose
+from framework.structures import registry
 from framework.structures.registry import check_reference
 from framework.study.schema import MAX_RUNS_PER_ENTRY, Strict, StudyHeader
 
@@ -113,12 +114,10 @@ class Config(StudyHeader):
         """A built-in catalogue, or ``module:function`` of a user module (returning a
         ``Catalogue`` or an ``OpenSeesModel``): checked by form here, imported only when the
         study runs or ``gomu validate --build`` asks (the trust model in the README)."""
-        from framework.diagnosis.effects import CATALOGUES
-
-        if v in CATALOGUES:
+        if v in registry.CATALOGUES:
             return v
         if ":" not in v:
-            raise ValueError(f"structure {v!r} has no effect catalogue; known: {sorted(CATALOGUES)} "
+            raise ValueError(f"structure {v!r} has no effect catalogue; known: {sorted(registry.CATALOGUES)} "
                              "or 'module:function' of your own model")
         try:
             check_reference(v, "structure")
@@ -171,7 +170,7 @@ def check(cfg: Config, source: str, base_dir: Path | None = None) -> None:
 # ---- plan --------------------------------------------------------------------------------
 @functools.lru_cache(maxsize=16)
 def _catalogue(structure: str, options_json: str, candidates_json: str) -> Catalogue:
-    return with_candidates(get_catalogue(structure, **json.loads(options_json)), json.loads(candidates_json))
+    return with_candidates(registry.catalogue(structure, **json.loads(options_json)), json.loads(candidates_json))
 
 
 def catalogue_of(task: dict) -> Catalogue:
@@ -304,7 +303,7 @@ def _check_task(task: dict) -> None:
                              f"known: {sorted(known)}")  # fmt: skip
         noise_of(gen)
         return
-    measured = likelihood.with_noise_model(measured_of(task["measured"], catalogue))
+    measured = likelihood.with_noise_model(measured_of(task["measured"], catalogue, builtin=registry.builtin_measured))
     UpdatingProblem(catalogue.model(start), measured, objective=likelihood.objective_spec())
 
 
@@ -315,7 +314,7 @@ def run(spec: dict) -> dict[str, list[dict]]:
     task = spec["task"]
     catalogue = catalogue_of(task)
     try:
-        measured = measured_of(task["measured"], catalogue, spec["seed"])
+        measured = measured_of(task["measured"], catalogue, spec["seed"], registry.builtin_measured)
         task = {**task, "settings": settings_of(task, catalogue)}
         diagnosis = diagnose(catalogue, measured, DiagnoseSettings(**task["settings"]), start=task["start_effects"])
     except (ModelEvaluationError, InputError) as exc:
