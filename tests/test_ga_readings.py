@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from framework.models import lab_frame as lf
 from framework.optimizers import ga, run_optimizer
 from framework.optimizers.base import Budget
-from framework.problem import UpdatingProblem
+from framework.structures.lab_frame import model as lf
+from framework.updating.problem import UpdatingProblem
 
 #: studies/lab_frame.yaml's termination (SPEC 4) and the best value any method finds there
 LAB_BUDGET = Budget(max_evaluations=50_000, stall_iterations=10, stall_tolerance=1e-8, target_objective=1e-6)
@@ -146,7 +146,7 @@ def test_scheme_decides_the_unset_mutation():
 
 
 def test_a_bad_mutation_in_a_config_is_one_line_naming_the_field(tmp_path):
-    from framework.errors import InputError
+    from framework.core.errors import InputError
     from framework.study.config import load
 
     path = tmp_path / "study.yaml"
