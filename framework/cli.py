@@ -1,4 +1,4 @@
-"""Command line: ``gomu run | report | validate | bench``."""
+"""Command line: ``gomu run | report | validate | diagnose | bench``."""
 
 from __future__ import annotations
 
@@ -90,9 +90,54 @@ def _named_code(data: dict) -> set[str]:
 
 
 def _cmd_diagnose(args) -> int:
-    from framework.study.kinds.diagnose import diagnose_command
+    """``gomu diagnose CONFIG``: run a one-run study of kind ``diagnose`` and print the verdict.
 
-    return diagnose_command(args.config, overrides=args.set, output=args.output)
+    The config's ``kind`` may be left out; ``--output`` replaces the config's.
+    """
+    from framework.core.status import succeeded
+    from framework.study.config import read_with_overrides, validate
+    from framework.study.plan import plan
+    from framework.study.runner import run_study
+
+    path, output = args.config, args.output
+    data = read_with_overrides(path, args.set, what="diagnose config")
+    data.setdefault("kind", "diagnose")
+    if data["kind"] != "diagnose":
+        raise InputError(f"{path}: kind: gomu diagnose runs configs of kind 'diagnose', got {data['kind']!r}")
+    if output:
+        data["output"] = output
+    cfg = validate(data, source=str(path), base_dir=Path(path).parent)
+    n_runs = len(plan(cfg))
+    if n_runs != 1:
+        raise InputError(f"{path}: gomu diagnose runs one diagnosis, this config plans {n_runs}; "
+                         f"use gomu run {path}")  # fmt: skip
+    tables = run_study(cfg, progress=False)
+    s = tables["summary"].iloc[0]
+    out = cfg.output_dir()
+    if not succeeded(s["status"]):
+        sys.stderr.write(f"{cfg.study}: diagnosis failed: {s['error']}\ntables in {out}\n")
+        return 1
+    named = s["named_effect"]
+    if isinstance(s.get("named_location"), str) and s["named_location"]:
+        named += f" at {s['named_location']}"
+    if s.get("partial"):
+        named += " (partial explanation)"
+    lines = [
+        f"{cfg.study}: {s['conclusion']}",
+        f"rounds: {s['headline']}",
+        f"named effect(s): {named}",
+        f"gap before: max |freq error| {s['max_freq_error_pct_before']:.2f} %, min MAC {s['min_mac_before']:.3f}, "
+        f"unmatched {s['n_unmatched_before']} (chi2 {s['chi2_before']:.1f}, p {s['p_before']:.3g})",
+        f"gap after:  max |freq error| {s['max_freq_error_pct_after']:.2f} %, min MAC {s['min_mac_after']:.3f}, "
+        f"unmatched {s['n_unmatched_after']} (chi2 {s['chi2_after']:.1f}, p {s['p_after']:.3g})",
+        f"tables and figure in {out}",
+    ]
+    if isinstance(s.get("flags"), str) and s["flags"]:
+        lines.insert(3, f"flags: {s['flags']}")
+    if isinstance(s.get("noise_warning"), str) and s["noise_warning"]:
+        lines.insert(1, s["noise_warning"])
+    sys.stdout.write("\n".join(lines) + "\n")
+    return 0
 
 
 def _cmd_bench(args) -> int:

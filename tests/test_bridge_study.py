@@ -220,14 +220,16 @@ def test_bridge_study_replication_settings_follow_the_source():
     total budget; our variants are labelled (ours)."""
     cfg = load(ROOT / "studies" / "bridge.yaml")
     algs = cfg.algorithms
-    pinv = {k: a for k, a in algs.items() if a.settings.get("method") == "pseudo_inverse"}
-    assert sorted(a.settings["start_factor"] for a in pinv.values()) == [0.92, 1.0, 1.11]
+    given = {k: a.model_dump(mode="json")["settings"] for k, a in algs.items()}  # the settings as written
+    pinv = {k: a for k, a in algs.items() if given[k].get("method") == "pseudo_inverse"}
+    assert sorted(a.settings.start_factor for a in pinv.values()) == [0.92, 1.0, 1.11]
     assert all(not k.endswith(" (ours)") for k in pinv)
-    assert all(k.endswith(" (ours)") for k, a in algs.items() if a.settings.get("method") == "trust_region")
+    assert all(k.endswith(" (ours)") for k in algs if given[k].get("method") == "trust_region")
     pso = algs["pso"]
-    assert pso.settings == {"swarm_size": 20, "factor": 0.75}
+    assert given["pso"] == {"swarm_size": 20, "factor": 0.75}
+    assert pso.settings.swarm_size == 20 and pso.settings.factor == 0.75 and pso.settings.c1 == 1.5
     assert pso.budget == {"max_iterations": 200, "stall_tolerance": 0.0} and (pso.runs or cfg.runs) == 10
     assert cfg.budget.max_evaluations >= 200 * 20 and cfg.budget.target_objective < 1e-3  # 2.7e-3 is the floor
     snt = algs["snt"]
-    assert snt.settings["n_minima"] == 4 and "max_iterations" not in snt.budget
+    assert snt.settings.n_minima == 4 and "max_iterations" not in snt.budget
     assert snt.budget["max_evaluations"] >= 4 * 200 * 20

@@ -151,7 +151,7 @@ def test_targets_and_agreement_tables():
         {"hidden_effect": "c", "named_effect": "a", "hidden_variant": "", "named_variant": "x", "partial": True,
          "magnitude": 1.0, "data_stds": True, "hidden_in_candidates": False},
     ]  # fmt: skip
-    summary = pd.DataFrame([r | {"data_source": "generated", "status": "completed", "case": f"c{i}", "seed": i,
+    summary = pd.DataFrame([r | {"data_source": "generated", "status": "ok", "case": f"c{i}", "seed": i,
                                  "structure": "s", "noise": "low", "run_id": str(i), "bic_decisive_round1": True,
                                  "bic_best_round1": "a", "bic_best_variant_round1": "x",
                                  "evidence_best_round1": "a" if i else "b", "evidence_best_variant_round1": "x",

@@ -12,7 +12,7 @@ from framework.core.errors import InputError
 from framework.core.parameters import Parameter, ParameterSet
 from framework.measured.modes import MeasuredModes
 from framework.models.base import ModalResult
-from framework.optimizers import Budget, run_optimizer, settings_model
+from framework.optimizers import OPTIMIZERS, Budget, run_optimizer
 from framework.optimizers.hybrid import distinct_best
 from framework.optimizers.sampling import sample
 from framework.structures.lab_frame.model import make_model, measured
@@ -123,15 +123,15 @@ def test_hybrid_budget_is_shared_and_enforced():
 ])
 def test_hybrid_settings_are_checked(settings, message):
     with pytest.raises(Exception, match=message):
-        settings_model("hybrid").model_validate(settings, strict=True)
+        OPTIMIZERS["hybrid"].settings.model_validate(settings, strict=True)
 
 
 def test_hybrid_settings_dump_by_their_config_names():
-    dumped = settings_model("hybrid").model_validate(hybrid("pso")).model_dump(mode="json")
+    dumped = OPTIMIZERS["hybrid"].settings.model_validate(hybrid("pso")).model_dump(mode="json")
     assert set(dumped) == {"global", "local", "n_candidates", "min_distance", "max_evaluations_per_candidate",
                            "refine"}
     assert dumped["global"]["settings"]["swarm_size"] == 20 and "x0" not in dumped["local"]["settings"]
-    assert settings_model("hybrid").model_validate(dumped, strict=True).model_dump(mode="json") == dumped
+    assert OPTIMIZERS["hybrid"].settings.model_validate(dumped, strict=True).model_dump(mode="json") == dumped
 
 
 def test_hybrid_in_a_study_writes_phase_columns_and_candidate_rows(tmp_path):
@@ -253,9 +253,9 @@ def test_early_stopping_keeps_the_start_that_is_best(seed):
 
 def test_multistart_settings_are_checked():
     with pytest.raises(Exception, match=r"\['start'\] are set by the multi-start"):
-        settings_model("multistart").model_validate({"local": {"start": "random"}}, strict=True)
+        OPTIMIZERS["multistart"].settings.model_validate({"local": {"start": "random"}}, strict=True)
     with pytest.raises(Exception, match="stop_factor"):
-        settings_model("multistart").model_validate({"stop_factor": 0.5}, strict=True)
+        OPTIMIZERS["multistart"].settings.model_validate({"stop_factor": 0.5}, strict=True)
 
 
 # ---- failed evaluations ---------------------------------------------------------------------
@@ -293,7 +293,7 @@ def test_sm_x_scale_setting():
     jac = run_optimizer("sm", problem, 1, budget, start="random", x_scale="jac")
     assert jac.objective < 1e-4 and jac.n_evaluations <= 400
     with pytest.raises(Exception, match="x_scale"):
-        settings_model("sm").model_validate({"x_scale": "auto"}, strict=True)
+        OPTIMIZERS["sm"].settings.model_validate({"x_scale": "auto"}, strict=True)
 
 
 def test_hybrid_counts_the_jacobians_of_its_polishing_runs():

@@ -563,7 +563,7 @@ def test_runs_repeat_a_test_with_new_record_seeds():
     ("tests.sweeps.f_range_hz", [0.0, 120.0], "reaches the Nyquist frequency 100.0"),
     ("tests.sweeps.subspace", None, "subspace: settings .* are required for n4sid and ssi_cov"),
     ("report.export.lab_identified.label", "nope", "report.export.lab_identified.label: no test 'nope'"),
-    ("report.figures", 3, "ident.yaml: report: figures: unknown key \\(value: 3\\)"),
+    ("report.figures", 3, "ident.yaml: report.figures: unknown key; known: \\['export'\\] \\(value: 3\\)"),
     ("report.export.lab_identified.method", "ssi_cov", "report.export.lab_identified.method: test .sweeps. has no"),
 ])
 def test_identification_config_errors_name_the_field(path, value, message):

@@ -114,14 +114,16 @@ def test_four_story_jacobian(options):
 
 @needs_smu
 @pytest.mark.parametrize("shape_term, solver", [("mac", "shift_invert"), ("eigenvector", "shift_invert"),
-                                                ("mac", "shift_invert_ldl")])
+                                                ("mac", "shift_invert_ldl"), ("eigenvector_smu_as_run", "shift_invert_ldl")])
 def test_footbridge_jacobian(shape_term, solver):
     """946 DOFs, singular M (474 massless DOFs), 17 parameters, sparse Nelson; also on the
-    modes of the reused-LDL' solver."""
+    modes of the reused-LDL' solver, and with the eigenvector weights of the SMU package's runs."""
     if solver == "shift_invert_ldl":
         pytest.importorskip("qdldl")
-    spec = ObjectiveSpec(formulation="reference",
-                         options={"matching": "order", "weights": "std", "shape_term": shape_term})
+    options = {"matching": "order", "weights": "std", "shape_term": shape_term}
+    if shape_term == "eigenvector_smu_as_run":
+        options.update(shape_term="eigenvector", eigenvector_weights="smu_as_run")
+    spec = ObjectiveSpec(formulation="reference", options=options)
     problem = UpdatingProblem(smu.make_footbridge(solver=solver), smu.footbridge_measured(), objective=spec)
     x = problem.x_initial + np.random.default_rng(2).uniform(-0.05, 0.05, problem.n_params)
     assert problem.jacobian(x).cost == 5  # one factorization per measured mode
@@ -156,8 +158,11 @@ def test_eigenvector_residuals_by_hand():
     """Modes e1 (lambda 1), e2 (lambda 4). Measured lambda 1.25 and 5: eigenvalue terms
     (1.25 - 1)/1.25 = 0.2 and (5 - 4)/5 = 0.2. Shape 1 = [1, 0.2, -0.1] is normalized at
     entry 1 (it is 1 there): psi_e - psi_a = [0.2, -0.1] at entries 2, 3, weighted by
-    1/std = [10, 5] -> [2.0, -0.5]. Shape 2 = [0.3, 1, 0] (reference entry 2): [0.3, 0] at
-    entries 1, 3, weighted [10, 2] -> [3.0, 0.0]."""
+    1/(3 std) = [10, 5]/3 (3 measured DOFs) -> [2/3, -1/6]. Shape 2 = [0.3, 1, 0] (reference
+    entry 2): [0.3, 0] at entries 1, 3, weighted [10, 2]/3 -> [1.0, 0.0]. With
+    eigenvector_weights 'smu_as_run' mode i's entries are all weighted 1/(3 std(i, 1)):
+    mode 1 1/(3 * 0) is the reference entry's zero -> an input error; with std(1, 1) = 0.05
+    mode 1 is weighted 20/3 -> [4/3, -2/3] and mode 2 1/(3 * 0.1) -> [1.0, 0.0]."""
     measured = MeasuredModes(
         frequencies_hz=np.array([_f_hz(1.25), _f_hz(5.0)]),
         dofs=("u1", "u2", "u3"),
@@ -169,9 +174,19 @@ def test_eigenvector_residuals_by_hand():
                          options={"matching": "order", "weights": "std", "shape_term": "eigenvector"})
     problem = UpdatingProblem(_diagonal_model(), measured, objective=spec)
     r = problem.residuals(problem.x_initial)
-    np.testing.assert_allclose(r, [0.2, 0.2, 2.0, -0.5, 3.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(r, [0.2, 0.2, 2 / 3, -1 / 6, 1.0, 0.0], atol=1e-12)
     pi_lam, pi_shape = problem.objectives(problem.x_initial[None, :])[0]
-    assert pi_lam == pytest.approx(0.08) and pi_shape == pytest.approx(4.0 + 0.25 + 9.0)
+    assert pi_lam == pytest.approx(0.08) and pi_shape == pytest.approx(4 / 9 + 1 / 36 + 1.0)
+    # the weights the SMU package's code applied (its published results)
+    from framework.core.errors import InputError
+
+    as_run = ObjectiveSpec(formulation="reference", options={
+        "matching": "order", "weights": "std", "shape_term": "eigenvector", "eigenvector_weights": "smu_as_run"})
+    with pytest.raises(InputError, match="shape_std of mode 1 at DOF 'u1' is zero"):
+        UpdatingProblem(_diagonal_model(), measured, objective=as_run)
+    measured.shape_std[0, 0] = 0.05
+    r = UpdatingProblem(_diagonal_model(), measured, objective=as_run).residuals(problem.x_initial)
+    np.testing.assert_allclose(r, [0.2, 0.2, 4 / 3, -2 / 3, 1.0, 0.0], atol=1e-12)
     # mac stays the default shape term
     mac = UpdatingProblem(_diagonal_model(), measured, objective=ObjectiveSpec(
         formulation="reference", options={"matching": "order", "weights": "unit"}))

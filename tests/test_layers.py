@@ -111,3 +111,27 @@ def test_no_import_cycles_between_modules():
     for m in sorted(edges):
         if m not in state:
             visit(m)
+
+
+def _module_path_strings() -> dict[str, list[str]]:
+    """module -> the module paths it writes as strings (``"framework.x.y"``, ``"framework.x.y:attr"``)."""
+    return {module: [node.value for node in ast.walk(ast.parse(path.read_text()))
+                     if isinstance(node, ast.Constant) and isinstance(node.value, str)
+                     and STRING_PATH.fullmatch(node.value)]
+            for module, path in _modules().items()}
+
+
+def test_kinds_optimizers_and_analyses_are_registered_as_objects_not_module_paths():
+    """No module path written as a string names a run kind, an optimizer or an analysis, nor
+    stands in the modules of those three registries."""
+    registries = ("framework.study.kinds", "framework.optimizers", "framework.report.analyses")
+    found = sorted(f"{module}: {text!r}" for module, texts in _module_path_strings().items() for text in texts
+                   if module.startswith(registries) or text.startswith(registries))
+    assert found == [], "module paths as strings:\n" + "\n".join(found)
+
+
+def test_diagnosis_does_not_import_study():
+    """A run kind's config schema lives with its kind (framework/study/kinds/), not in diagnosis."""
+    up = sorted(f"{m} -> {t}" for m, ts in _import_graph().items() for t in ts
+                if _package(m) == "diagnosis" and _package(t) == "study")
+    assert up == []

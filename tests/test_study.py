@@ -80,7 +80,7 @@ def test_unknown_parameter_name_in_bounds_is_reported(tmp_path):
 
 def test_cli_override_and_sweep_expand_to_a_grid(tmp_path):
     cfg = load(_write(tmp_path, SMALL), ["algorithms.pso.settings.swarm_size=8", "runs=3"])
-    assert cfg.algorithms["pso"].settings["swarm_size"] == 8
+    assert cfg.algorithms["pso"].settings.swarm_size == 8
     specs = plan(cfg)
     assert len(specs) == 3 + 3 + 1
     swept = validate(dict(SMALL, sweep={"algorithms.pso.settings.swarm_size": [5, 10]}))

@@ -110,7 +110,7 @@ def test_posterior_run_tables_on_the_lab_frame(tmp_path):
     run_study(_config(tmp_path, "lab"), figures=False)
     t = _tables(tmp_path, "lab")
     run = t["runs"].iloc[0]
-    assert run["status"] == "completed" and run["n_data"] == 9
+    assert run["status"] == "ok" and run["n_data"] == 9
     assert "frequency std 0.5 % of f" in run["noise_assumed"]
     p = t["parameters"].set_index("parameter")
     assert (p["ci90_lower"] < p["mean"]).all() and (p["mean"] < p["ci90_upper"]).all()

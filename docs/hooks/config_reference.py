@@ -85,18 +85,18 @@ def model_table(model: type[BaseModel], title: str, level: int = 3, seen: set | 
 
 
 def config_reference() -> str:
-    from framework.optimizers import OPTIMIZERS, settings_model
+    from framework.optimizers import OPTIMIZERS
     from framework.study.kinds import KINDS, get_kind
     from framework.study.schema import StudyHeader
 
     header_fields = tuple(StudyHeader.model_fields)
     parts = [model_table(StudyHeader, "Header (every study)", 2)]
     for kind in KINDS:
-        cfg = get_kind(kind).Config
+        cfg = get_kind(kind).config
         parts.append(model_table(cfg, f"Run kind `{kind}`", 2, skip=header_fields))
     parts.append("## Optimizer settings\n\nThe `settings:` of an `algorithms:` entry, per `algorithm:`.\n")
     for name in OPTIMIZERS:
-        parts.append(model_table(settings_model(name), f"`{name}`", 3))
+        parts.append(model_table(OPTIMIZERS[name].settings, f"`{name}`", 3))
     return "\n".join(parts)
 
 

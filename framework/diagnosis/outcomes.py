@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import pandas as pd
 
+from framework.core.status import succeeded
 from framework.diagnosis.score import NO_CHANGE
 
 GROUP = ["structure", "candidates", "hidden_effect", "magnitude", "noise", "data_stds"]
@@ -83,7 +84,7 @@ def cases(summary: pd.DataFrame) -> pd.DataFrame:
                          ("candidates", "catalogue")):
         df[col] = df[col].where(df[col].notna(), default) if col in df else default
     df["partial"] = df["partial"].astype(bool)
-    done = df["status"] == "completed"
+    done = df["status"].map(succeeded).astype(bool)
     flags = pd.DataFrame(
         [score(h, n, hv, nv) for h, n, hv, nv in df[["hidden_effect", "named_effect", "hidden_variant",
                                                        "named_variant"]].itertuples(index=False)],
@@ -102,7 +103,7 @@ def rates(cases: pd.DataFrame) -> pd.DataFrame:
     """Per structure, hidden effect, magnitude and noise: counts, outcome rates, median gaps."""
     if cases.empty:
         return pd.DataFrame()
-    ok = cases[cases["status"] == "completed"]
+    ok = cases[cases["status"].map(succeeded).astype(bool)]
     g = ok.groupby(GROUP, sort=True)
     out = g.agg(
         n_cases=("seed", "size"),
@@ -123,14 +124,14 @@ def rates(cases: pd.DataFrame) -> pd.DataFrame:
         n_unmatched_after=("n_unmatched_after", "sum"),
         wall_s=("wall_s", "median"),
     ).reset_index()
-    failed = cases[cases["status"] != "completed"].groupby(GROUP).size()
+    failed = cases[~cases["status"].map(succeeded).astype(bool)].groupby(GROUP).size()
     out["n_failed"] = [int(failed.get(tuple(k), 0)) for k in out[GROUP].to_numpy()]
     return out
 
 
 def targets(cases: pd.DataFrame) -> pd.DataFrame:
     """The acceptance rates of issue 17 over the completed cases (one row per target)."""
-    ok = cases[cases["status"] == "completed"]
+    ok = cases[cases["status"].map(succeeded).astype(bool)]
     hidden = ok[ok["hidden_effect"] != NO_CHANGE]
     inside = hidden[hidden["hidden_in_candidates"].astype(bool)]
     outside = hidden[~hidden["hidden_in_candidates"].astype(bool)]
@@ -165,7 +166,8 @@ def agreement(summary: pd.DataFrame) -> pd.DataFrame:
     need = {"bic_decisive_round1", "evidence_best_round1"}
     if summary.empty or not need <= set(summary):
         return pd.DataFrame()
-    d = summary[(summary["status"] == "completed") & summary["bic_decisive_round1"].fillna(False).astype(bool)]
+    done = summary["status"].map(succeeded).astype(bool)
+    d = summary[done & summary["bic_decisive_round1"].fillna(False).astype(bool)]
     out = d[["run_id", "case", "structure", "bic_best_round1", "bic_best_variant_round1", "evidence_best_round1",
              "evidence_best_variant_round1", "evidence_named_round1"]].copy()  # fmt: skip
     out["same_effect"] = out["bic_best_round1"] == out["evidence_best_round1"]

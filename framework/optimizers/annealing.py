@@ -33,7 +33,8 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from framework.optimizers.base import Budget, BudgetExhausted, Outcome, Settings, Termination
+from framework.core.status import Status
+from framework.optimizers.base import Budget, BudgetExhausted, Optimizer, Outcome, Settings, Termination
 
 
 class AnnealingSettings(Settings):
@@ -51,10 +52,9 @@ def restart_ratio(interval: int, qv: float) -> float:
     return (2.0 ** (qv - 1.0) - 1.0) / ((1.0 + interval) ** (qv - 1.0) - 1.0)
 
 
-def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
+def run(evaluator, seed: int, budget: Budget, s: AnnealingSettings) -> Outcome:
     from scipy.optimize import dual_annealing
 
-    s = AnnealingSettings(**settings)
     qv = s.visit if s.visit is not None else (2.62 if s.schedule == "exponential" else 1.5)
     ratio = float(np.clip(restart_ratio(s.reanneal_interval, qv), 1e-12, 0.999))
     termination = Termination(budget, evaluator, rules=("target",))
@@ -63,7 +63,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     def callback(x, f, context):  # a new best point; a failed one never meets the target
         return not evaluator.is_failed(x) and termination.update(f) is not None
 
-    status, n_iter = "budget", 0
+    status, n_iter = Status.BUDGET, 0
     try:
         res = dual_annealing(
             evaluator.objective1,
@@ -79,9 +79,12 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
             callback=callback,
         )
         n_iter = int(res.nit)
-        status = termination.reason or "converged"
+        status = termination.reason or Status.CONVERGED
         message = str(res.message)
     except BudgetExhausted:
         message = "evaluation budget exhausted"
     extra = {"visit": qv, "restart_temp_ratio": ratio, "initial_temp": s.initial_temp}
     return Outcome(status, n_iter, message=message, extra=extra)
+
+
+OPTIMIZER = Optimizer("annealing", AnnealingSettings, run)

@@ -1,7 +1,10 @@
-"""What every optimizer adapter shares: budget, termination rule, outcome, result, seeding.
+"""What every optimizer adapter shares: the :class:`Optimizer` object, settings, budget,
+termination rule, outcome, result, seeding.
 
-Every adapter has the signature ``run(evaluator, seed, budget, **settings) -> Outcome``.
-It sees the problem only through the run's :class:`~framework.updating.evaluator.Evaluator`
+An optimizer is one :class:`Optimizer` object (name, pydantic :class:`Settings` class, adapter
+``run(evaluator, seed, budget, settings) -> Outcome``). Its settings are validated once, where
+they are read (:meth:`Optimizer.validate` for a config), and reach the adapter as that typed
+object. The adapter sees the problem only through the run's :class:`~framework.updating.evaluator.Evaluator`
 (``objective(X)``, ``objective1(x)``, ``residuals(x)``, ``objectives(X)``, ``n_params``,
 ``parameters``, ``x_initial``), which counts, budgets and remembers the evaluations;
 ``run_optimizer`` builds the :class:`OptimizerResult` from the evaluator and the outcome.
@@ -17,11 +20,14 @@ value after every iteration and stops when told.
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from framework.core.status import Status
 from framework.updating.evaluator import BudgetExhausted  # noqa: F401  (re-exported for the adapters)
 
 
@@ -41,6 +47,46 @@ class Settings(BaseModel):
     """Base of every optimizer's settings: unknown keys and non-finite numbers are rejected."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+def first_problem(exc: ValidationError) -> tuple[str, str]:
+    """(field path, problem) of the first error of a settings validation; the problem names the
+    value given. A message of a nested settings' own validator already starts with its path."""
+    first = exc.errors()[0]
+    path = ".".join(str(p) for p in first["loc"])
+    msg = first["msg"].removeprefix("Value error, ")
+    if first["type"] == "value_error":
+        if path and msg.startswith(path) and ": " in msg:
+            return tuple(msg.split(": ", 1))
+        return path, msg
+    if first["type"] == "extra_forbidden":
+        msg = "unknown key"
+    return path, f"{msg} (value {first.get('input')!r})"
+
+
+@dataclass(frozen=True)
+class Optimizer:
+    """One optimization method: its name, its settings class and its adapter.
+
+    ``run(evaluator, seed, budget, settings) -> Outcome`` gets the settings as an instance of
+    ``settings``, validated once where they were read: :meth:`validate` for settings read from
+    a config (strict types, as every config value), :func:`framework.optimizers.run_optimizer`
+    for keywords given in code.
+    """
+
+    name: str
+    settings: type[Settings]
+    run: Callable[[Any, int, Budget, Settings], Outcome]
+
+    def validate(self, data: Mapping[str, Any] | Settings, where: str = "settings") -> Settings:
+        """The settings of a config (strict); ValueError ``<where>.<field>: <problem> (value ...)``."""
+        if isinstance(data, self.settings):
+            return data
+        try:
+            return self.settings.model_validate(data, strict=True)
+        except ValidationError as exc:
+            path, problem = first_problem(exc)
+            raise ValueError(f"{'.'.join(filter(None, (where, path)))}: {problem}") from None
 
 
 @dataclass
@@ -119,17 +165,17 @@ class Termination:
         self.best = min(self.best, best)
         b = self.budget
         if "target" in self.rules and b.target_objective is not None and self.best < b.target_objective:
-            self.reason = "target"
+            self.reason = Status.TARGET
         elif "stall" in self.rules and self.stalled >= b.stall_iterations:
-            self.reason = "stalled"
+            self.reason = Status.STALLED
         elif "max_iterations" in self.rules and b.max_iterations is not None and self.iterations >= b.max_iterations:
-            self.reason = "max_iterations"
+            self.reason = Status.MAX_ITERATIONS
         return self.reason
 
     @property
     def status(self) -> str:
         """The stop reason; "budget" if no rule fired (the adapter ran out of evaluations)."""
-        return self.reason or "budget"
+        return self.reason or Status.BUDGET
 
 
 @contextlib.contextmanager
@@ -179,7 +225,7 @@ def build_result(algorithm: str, evaluator, seed: int, outcome: Outcome, wall_s:
     if x_best is None or not evaluator.has_success:
         x_best = np.full(evaluator.n_params, np.nan)
         objective = np.nan
-        status = "failed"
+        status = Status.FAILED
         what = "every evaluation failed" if evaluator.n_evaluations else "no evaluation was made"
         message = f"{what}: {evaluator.failure_summary()}" if evaluator.n_failed else what
     else:

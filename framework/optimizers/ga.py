@@ -98,7 +98,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from framework.optimizers.base import Budget, Outcome, Settings, Termination
+from framework.optimizers.base import Budget, Optimizer, Outcome, Settings, Termination
 from framework.optimizers.pymoo_problem import pymoo_problem
 
 
@@ -324,12 +324,11 @@ def _toolbox_parts(s: GASettings, selection, crossover, mutation):
     return FractionMating(), ElitistReplacement(), split
 
 
-def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
+def run(evaluator, seed: int, budget: Budget, s: GASettings) -> Outcome:
     from pymoo.algorithms.soo.nonconvex.ga import GA
     from pymoo.operators.sampling.rnd import FloatRandomSampling
     from pymoo.termination.max_gen import MaximumGenerationTermination
 
-    s = GASettings(**settings)
     selection, crossover, mutation = _operators(s)
     if s.scheme == "toolbox":
         mating, survival, split = _toolbox_parts(s, selection, crossover, mutation)
@@ -370,3 +369,6 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
                "scheme": s.scheme, "elite_count": s.elite_count if s.scheme == "toolbox" else None,
                "mutation": s.mutation},
     )
+
+
+OPTIMIZER = Optimizer("ga", GASettings, run)

@@ -44,68 +44,66 @@ updating kind adds to the runs table. Status: that of the polish that gave the r
 
 from __future__ import annotations
 
-import importlib
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import ConfigDict, Field, ValidationError, ValidationInfo, field_validator
+from pydantic import ConfigDict, Field, SerializeAsAny, ValidationInfo, field_serializer, field_validator
 
 from framework.core.errors import InputError
-from framework.optimizers import sm
-from framework.optimizers.base import Budget, BudgetExhausted, Outcome, Settings
+from framework.core.status import Status
+from framework.optimizers import annealing, ga, niching, pso, screening, sm
+from framework.optimizers.base import Budget, BudgetExhausted, Optimizer, Outcome, Settings
 from framework.updating.evaluator import Evaluator
 
-#: global phase algorithm -> (module, settings class)
-GLOBAL_ALGORITHMS: dict[str, tuple[str, str]] = {
-    "pso": ("framework.optimizers.pso", "PSOSettings"),
-    "ga": ("framework.optimizers.ga", "GASettings"),
-    "annealing": ("framework.optimizers.annealing", "AnnealingSettings"),
-    "snt": ("framework.optimizers.niching", "SNTSettings"),
-    "screening": ("framework.optimizers.screening", "ScreeningSettings"),
-}
+#: the methods of the global phase
+GLOBAL_ALGORITHMS: dict[str, Optimizer] = {o.name: o for o in (
+    pso.OPTIMIZER, ga.OPTIMIZER, annealing.OPTIMIZER, niching.OPTIMIZER, screening.OPTIMIZER,
+)}
 
 #: SM settings that the hybrid sets itself (the start of each polish)
 _START_KEYS = ("start", "start_factor", "x0")
 
 
-def _check_nested(settings_class, settings: dict, where: str) -> dict:
-    """``settings`` validated by ``settings_class`` (strict, as in a config), defaults filled in."""
-    try:
-        return settings_class.model_validate(settings, strict=True).model_dump(mode="json")
-    except ValidationError as exc:
-        first = exc.errors()[0]
-        loc = ".".join(str(p) for p in first["loc"])
-        msg = "unknown key" if first["type"] == "extra_forbidden" else first["msg"]
-        raise ValueError(f"{where}.{loc}: {msg} (value {first.get('input')!r})") from None
+def local_settings(v: Any, where: str, set_by: str) -> sm.SMSettings:
+    """SM settings of the polishing runs (typed, strict as in a config), without a start of
+    their own: ``set_by`` says who sets it."""
+    given = [k for k in _START_KEYS if isinstance(v, dict) and k in v]
+    if given:
+        raise ValueError(f"{where}: {given} are set by {set_by}")
+    return sm.OPTIMIZER.validate(v, f"{where} (sm)")
+
+
+def without_start(settings: sm.SMSettings, handler) -> dict:
+    """The SM settings as written into a task (and config.yaml): without the start keys."""
+    return {k: v for k, v in handler(settings).items() if k not in _START_KEYS}
 
 
 class GlobalPhase(Settings):
     algorithm: Literal["pso", "ga", "annealing", "snt", "screening"]
-    settings: dict[str, Any] = Field(default_factory=dict, validate_default=True)
+    settings: SerializeAsAny[Settings] = Field(default_factory=dict, validate_default=True)
     max_evaluations: int = Field(gt=0)
 
-    @field_validator("settings")
+    @field_validator("settings", mode="before")
     @classmethod
-    def _settings(cls, v: dict, info: ValidationInfo) -> dict:
+    def _settings(cls, v, info: ValidationInfo):
         name = info.data.get("algorithm")
         if name is None:
             return v
-        module, attr = GLOBAL_ALGORITHMS[name]
-        return _check_nested(getattr(importlib.import_module(module), attr), v, f"global.settings ({name})")
+        return GLOBAL_ALGORITHMS[name].validate(v, f"global.settings ({name})")
 
 
 class LocalPhase(Settings):
     algorithm: Literal["sm"] = "sm"
-    settings: dict[str, Any] = Field(default_factory=dict, validate_default=True)
+    settings: sm.SMSettings = Field(default_factory=dict, validate_default=True)
 
-    @field_validator("settings")
+    @field_validator("settings", mode="before")
     @classmethod
-    def _settings(cls, v: dict) -> dict:
-        given = [k for k in _START_KEYS if k in v]
-        if given:
-            raise ValueError(f"local.settings: {given} are set by the hybrid (each polish starts at a candidate)")
-        out = _check_nested(sm.SMSettings, v, "local.settings (sm)")
-        return {k: val for k, val in out.items() if k not in _START_KEYS}
+    def _settings(cls, v):
+        return local_settings(v, "local.settings", "the hybrid (each polish starts at a candidate)")
+
+    @field_serializer("settings", mode="wrap")
+    def _dump(self, settings, handler):
+        return without_start(settings, handler)
 
 
 class HybridSettings(Settings):
@@ -164,8 +162,7 @@ def _refine(evaluator, seed: int, budget: Budget, s: HybridSettings, best: dict,
     numbered after the candidates, with ``refines`` naming the candidate it continues."""
     x0 = np.asarray(best["x_polished"], dtype=float)
     child = Evaluator(evaluator.problem, share, parent=evaluator)
-    out = sm.run(child, seed, budget.model_copy(update={"max_evaluations": share}), x0=x0.tolist(),
-                 **s.local.settings)
+    out = sm.run(child, seed, budget.model_copy(update={"max_evaluations": share}), polish_from(s.local.settings, x0))
     params = evaluator.parameters
     return {
         "candidate": number,
@@ -179,8 +176,12 @@ def _refine(evaluator, seed: int, budget: Budget, s: HybridSettings, best: dict,
     }
 
 
-def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
-    s = HybridSettings(**settings)
+def polish_from(settings: sm.SMSettings, x0: np.ndarray) -> sm.SMSettings:
+    """The local settings with the start ``x0`` (normalized)."""
+    return settings.model_copy(update={"x0": np.asarray(x0, float).tolist()})
+
+
+def run(evaluator, seed: int, budget: Budget, s: HybridSettings) -> Outcome:
     g = s.global_phase
     if g.max_evaluations >= budget.max_evaluations:
         raise InputError(f"hybrid: global.max_evaluations ({g.max_evaluations}) must be below the run's "
@@ -190,13 +191,12 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
 
     # ---- global phase
     recorder = _Recorder(problem, g.max_evaluations, evaluator)
-    module = importlib.import_module(GLOBAL_ALGORITHMS[g.algorithm][0])
     try:
-        global_out = module.run(recorder, seed, budget.model_copy(update={"max_evaluations": g.max_evaluations}),
-                                **g.settings)
+        global_out = GLOBAL_ALGORITHMS[g.algorithm].run(
+            recorder, seed, budget.model_copy(update={"max_evaluations": g.max_evaluations}), g.settings)
         global_status, global_iterations, global_extra = global_out.status, global_out.n_iterations, global_out.extra
     except BudgetExhausted:
-        global_status, global_iterations, global_extra = "budget", 0, {}
+        global_status, global_iterations, global_extra = Status.BUDGET, 0, {}
     X, values = recorder.evaluated()
     picks = distinct_best(X, values, s.n_candidates, s.min_distance)
     global_record = {
@@ -223,8 +223,8 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
             candidates.append({**record, "status": "not_run", "n_evaluations": 0, "polished_objective": None})
             continue
         child = Evaluator(problem, share, parent=evaluator)
-        out = sm.run(child, seed, budget.model_copy(update={"max_evaluations": share}), x0=x0.tolist(),
-                     **s.local.settings)
+        out = sm.run(child, seed, budget.model_copy(update={"max_evaluations": share}),
+                     polish_from(s.local.settings, x0))
         iterations += out.n_iterations
         polished = float(child.best_objective) if child.has_success else None
         record.update({
@@ -252,7 +252,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
             best_c, best_value, best_extra, best_status = record["candidate"], record["polished_objective"], extra_j, \
                 record["status"]
     local_evaluations = sum(r["n_evaluations"] for r in candidates)
-    status = best_status if best_c is not None else "budget"
+    status = best_status if best_c is not None else Status.BUDGET
     extra: dict[str, Any] = {"global": global_record}
     extra.update({f"candidate_{r['candidate']}": r for r in candidates})
     if "condition_number" in best_extra:
@@ -266,3 +266,6 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
                f"{global_record['objective']:.4g}); {extra['run_columns']['n_polished']} of {len(picks)} "
                f"candidate(s) polished by sm" + (f", best from candidate {best_c}" if best_c else ""))
     return Outcome(status, iterations, message=message, extra=extra)
+
+
+OPTIMIZER = Optimizer("hybrid", HybridSettings, run)

@@ -67,11 +67,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from pydantic import Field, field_validator
+from pydantic import Field, field_serializer, field_validator
 
+from framework.core.status import Status
 from framework.optimizers import sm
-from framework.optimizers.base import Budget, Outcome, Settings
-from framework.optimizers.hybrid import _START_KEYS, _check_nested
+from framework.optimizers.base import Budget, Optimizer, Outcome, Settings
+from framework.optimizers.hybrid import local_settings, polish_from, without_start
 from framework.optimizers.sampling import Sampler, sample
 from framework.updating.evaluator import BudgetExhausted, EvaluationRecord, Evaluator
 
@@ -86,16 +87,16 @@ class MultiStartSettings(Settings):
     early_stop: bool = True
     stop_factor: float = Field(10.0, gt=1)
     check_evaluations: int | None = Field(None, gt=0)
-    local: dict[str, Any] = Field(default_factory=dict, validate_default=True)
+    local: sm.SMSettings = Field(default_factory=dict, validate_default=True)
 
-    @field_validator("local")
+    @field_validator("local", mode="before")
     @classmethod
-    def _local(cls, v: dict) -> dict:
-        given = [k for k in _START_KEYS if k in v]
-        if given:
-            raise ValueError(f"local: {given} are set by the multi-start (each start has its own point)")
-        out = _check_nested(sm.SMSettings, v, "local (sm)")
-        return {k: val for k, val in out.items() if k not in _START_KEYS}
+    def _local(cls, v):
+        return local_settings(v, "local", "the multi-start (each start has its own point)")
+
+    @field_serializer("local", mode="wrap")
+    def _dump(self, settings, handler):
+        return without_start(settings, handler)
 
 
 class StartDominated(BudgetExhausted):
@@ -130,7 +131,7 @@ class StartTask:
     x0: np.ndarray
     seed: int
     budget: Budget
-    local: dict
+    local: sm.SMSettings
     check_evaluations: int | None
     threshold: float
     isolate: tuple | None  # (timeout_s, isolate_vectorized) of a 1-worker IsolatedRunner, or None
@@ -159,7 +160,7 @@ def run_start(task: StartTask) -> StartResult:
     try:
         ev = _WatchedEvaluator(task.problem, task.budget.max_evaluations, runner, task.check_evaluations,
                                task.threshold)
-        out = sm.run(ev, task.seed, task.budget, x0=task.x0.tolist(), **task.local)
+        out = sm.run(ev, task.seed, task.budget, polish_from(task.local, task.x0))
     finally:
         if close is not None:
             close()
@@ -220,8 +221,7 @@ def _collect(pairs, n: int) -> list:
     return out
 
 
-def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
-    s = MultiStartSettings(**settings)
+def run(evaluator, seed: int, budget: Budget, s: MultiStartSettings) -> Outcome:
     k = evaluator.n_params
     params = evaluator.parameters
     starts = sample(s.n_starts, k, seed, s.sampler)
@@ -234,7 +234,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         for i, x in enumerate(starts)
     ]
     incumbent = np.inf
-    best_i, best_extra, best_status = None, {}, "budget"
+    best_i, best_extra, best_status = None, {}, Status.BUDGET
     iterations = 0
     reason = None
     for b0 in range(0, s.n_starts, s.batch_size):
@@ -245,7 +245,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
             share = min(share, s.max_evaluations_per_start)
         share = min(share, int(remaining // len(batch)))
         if share < minimum:
-            reason = "budget"
+            reason = Status.BUDGET
             break
         threshold = s.stop_factor * incumbent if s.early_stop and np.isfinite(incumbent) else np.inf
         tasks = [
@@ -269,15 +269,15 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
             if objective is not None and objective < incumbent:
                 incumbent, best_i, best_extra, best_status = objective, res.index, res.extra, res.status
         if budget.target_objective is not None and incumbent < budget.target_objective:
-            reason = "target"
+            reason = Status.TARGET
             break
     for r in records:
         r.setdefault("status", "not_run")
     n_run = sum(r["status"] != "not_run" for r in records)
     n_stopped = sum(r["status"] == "stopped_early" for r in records)
-    status = reason or (best_status if best_i is not None else "budget")
+    status = reason or (best_status if best_i is not None else Status.BUDGET)
     if reason is None and n_run < s.n_starts:
-        status = "budget"
+        status = Status.BUDGET
     extra: dict[str, Any] = {f"start_{r['start']}": r for r in records}
     if "condition_number" in best_extra:
         extra["condition_number"] = best_extra["condition_number"]
@@ -286,3 +286,6 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     message = (f"{n_run} of {s.n_starts} starts run, {n_stopped} stopped early"
                + (f"; best from start {best_i + 1}" if best_i is not None else ""))
     return Outcome(status, iterations, message=message, extra=extra)
+
+
+OPTIMIZER = Optimizer("multistart", MultiStartSettings, run)

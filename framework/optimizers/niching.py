@@ -30,10 +30,12 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, field_serializer
 
+from framework.core.status import Status
 from framework.optimizers import pso
-from framework.optimizers.base import Budget, Outcome, Settings
+from framework.optimizers.base import Budget, Optimizer, Outcome, Settings
+from framework.optimizers.pso import PSOSettings
 from framework.updating.problem import Evaluations
 
 
@@ -42,7 +44,13 @@ class SNTSettings(Settings):
     niche_radius: float | None = Field(None, gt=0)
     derating_m: float = Field(0.1, gt=0, lt=1)
     boundary_tolerance: float = Field(0.01, ge=0)
-    pso: dict = Field(default_factory=dict)
+    #: the settings of each niche's PSO run
+    pso: PSOSettings = Field(default_factory=PSOSettings)
+
+    @field_serializer("pso")
+    def _as_given(self, settings: PSOSettings) -> dict:
+        """Only the PSO settings given (as a run's identity has always held them)."""
+        return settings.model_dump(mode="json", exclude_unset=True)
 
 
 def niche_radius(k: int, p: int) -> float:
@@ -110,8 +118,7 @@ def derated(problem, minima, radius: float, m: float) -> Derated:
     return Derated(problem, tuple(np.asarray(s_, float) for s_ in minima), float(radius), float(m))
 
 
-def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
-    s = SNTSettings(**settings)
+def run(evaluator, seed: int, budget: Budget, s: SNTSettings) -> Outcome:
     problem = evaluator.problem
     r = s.niche_radius or niche_radius(evaluator.n_params, s.n_minima)
     minima: list[np.ndarray] = []
@@ -124,7 +131,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         view = derated(problem, minima, r, s.derating_m)
         sub_evaluator = evaluator.child(view, share)
         sub_budget = budget.model_copy(update={"max_evaluations": share})
-        sub = pso.run(sub_evaluator, seed + 1000 * n, sub_budget, **s.pso)
+        sub = pso.run(sub_evaluator, seed + 1000 * n, sub_budget, s.pso)
         iterations += sub.n_iterations
         if sub_evaluator.best_x is None:  # no successful evaluation in this niche search
             records.append({"minimum": n + 1, "failed": True, "n_evaluations": sub_evaluator.n_evaluations,
@@ -157,10 +164,13 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     found = [rec for rec in records if not rec.get("failed")]
     best = min(found, key=lambda rec: rec["raw_objective"]) if found else None
     return Outcome(
-        "completed" if len(records) == s.n_minima else "budget",
+        Status.COMPLETED if len(records) == s.n_minima else Status.BUDGET,
         iterations,
         message=f"{len(found)} of {s.n_minima} minima found",
         extra={"minima": records, "niche_radius": r, "derating_m": s.derating_m},
         x_best=np.array(best["x"]) if best else None,
         objective=best["raw_objective"] if best else None,
     )
+
+
+OPTIMIZER = Optimizer("snt", SNTSettings, run)

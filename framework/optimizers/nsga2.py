@@ -42,7 +42,8 @@ import math
 import numpy as np
 from pydantic import Field
 
-from framework.optimizers.base import Budget, Outcome, Settings, Termination
+from framework.core.status import Status
+from framework.optimizers.base import Budget, Optimizer, Outcome, Settings, Termination
 from framework.optimizers.pymoo_problem import pymoo_problem
 
 log = logging.getLogger(__name__)
@@ -100,14 +101,13 @@ def _survival_class():
     return ParetoFractionSurvival
 
 
-def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
+def run(evaluator, seed: int, budget: Budget, s: NSGA2Settings) -> Outcome:
     """NSGA-II on ``evaluator.objectives``; final point nearest the ideal point of the front."""
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.operators.crossover.sbx import SBX
     from pymoo.operators.mutation.pm import PM
     from pymoo.termination.max_gen import MaximumGenerationTermination
 
-    s = NSGA2Settings(**settings)
     n_gen = min(s.n_generations, max(1, budget.max_evaluations // (s.pop_size * evaluator.cost)))
     if n_gen < s.n_generations:
         log.info(
@@ -137,7 +137,7 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         if termination.update(evaluator.best_objective):
             break
     if generation == 0:  # the budget does not afford one population: nothing evaluated, a failed run
-        return Outcome("budget", 0, message=f"budget of {budget.max_evaluations} evaluations is smaller than "
+        return Outcome(Status.BUDGET, 0, message=f"budget of {budget.max_evaluations} evaluations is smaller than "
                                             f"one population of {s.pop_size}")
     res = algorithm.result()
     front_F = np.atleast_2d(np.asarray(res.F, dtype=float))
@@ -159,8 +159,11 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     if termination.reason is not None:
         status = termination.reason
     else:
-        status = "max_generations" if generation >= s.n_generations else "budget"
+        status = Status.MAX_GENERATIONS if generation >= s.n_generations else Status.BUDGET
     return Outcome(
         status, generation, message=f"{len(front_F)} points on the final front", extra=extra,
         x_best=front_X[chosen] if keep.any() else None, objective=float(front_F[chosen].sum()),
     )  # fmt: skip
+
+
+OPTIMIZER = Optimizer("nsga2", NSGA2Settings, run)

@@ -22,7 +22,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from framework.optimizers.base import Budget, Outcome, Settings, Termination, seeded_global_numpy
+from framework.optimizers.base import Budget, Optimizer, Outcome, Settings, Termination, seeded_global_numpy
 
 
 class PSOSettings(Settings):
@@ -60,8 +60,7 @@ def _keep_logging():
                 lg.disabled = disabled.get(name, False)
 
 
-def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
-    s = PSOSettings(**settings)
+def run(evaluator, seed: int, budget: Budget, s: PSOSettings) -> Outcome:
     with _keep_logging():
         from pyswarms.backend.generators import create_swarm
         from pyswarms.backend.handlers import BoundaryHandler, VelocityHandler
@@ -105,3 +104,6 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
     return Outcome(
         termination.status, iteration, extra={"swarm_size": s.swarm_size, "w": w0, "c1": c1, "c2": c2}
     )
+
+
+OPTIMIZER = Optimizer("pso", PSOSettings, run)

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from framework.optimizers.base import Budget, Outcome, Settings
+from framework.core.status import Status
+from framework.optimizers.base import Budget, Optimizer, Outcome, Settings
 from framework.optimizers.sampling import Sampler, sample
 
 
@@ -21,15 +22,17 @@ class ScreeningSettings(Settings):
     include_initial: bool = False
 
 
-def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
-    s = ScreeningSettings(**settings)
+def run(evaluator, seed: int, budget: Budget, s: ScreeningSettings) -> Outcome:
     affordable = int(min(budget.max_evaluations, evaluator.remaining) // evaluator.cost)
     n = min(s.n_points or affordable, affordable)
     if n < 1:
-        return Outcome("budget", 0, message="no evaluation left for the screening sample")
+        return Outcome(Status.BUDGET, 0, message="no evaluation left for the screening sample")
     X = sample(n, evaluator.n_params, seed, s.sampler)
     if s.include_initial:
         X[0] = evaluator.x_initial
     evaluator.objective(X)
-    status = "completed" if n == (s.n_points or n) else "budget"
+    status = Status.COMPLETED if n == (s.n_points or n) else Status.BUDGET
     return Outcome(status, 1, extra={"sampler": s.sampler, "n_points": int(n)})
+
+
+OPTIMIZER = Optimizer("screening", ScreeningSettings, run)

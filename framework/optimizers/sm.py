@@ -49,7 +49,8 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, field_validator
 
-from framework.optimizers.base import Budget, BudgetExhausted, Outcome, Settings, Termination
+from framework.core.status import Status
+from framework.optimizers.base import Budget, BudgetExhausted, Optimizer, Outcome, Settings, Termination
 
 
 class SMSettings(Settings):
@@ -119,10 +120,9 @@ def jacobian_argument(evaluator, method: str, diff_step: float):
     return lambda x: evaluator.jacobian(x, fd_step=diff_step)
 
 
-def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
+def run(evaluator, seed: int, budget: Budget, s: SMSettings) -> Outcome:
     from scipy.optimize import least_squares
 
-    s = SMSettings(**settings)
     if s.method == "pseudo_inverse":
         return run_pseudo_inverse(evaluator, seed, budget, s)
     x0 = start_point(evaluator, seed, s)
@@ -157,9 +157,9 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         if termination.reason is not None:
             status = termination.reason
         elif res.status <= 0 or evaluator.is_failed(res.x):
-            status = "not_converged"  # least squares gave up, or stopped on a failed point
+            status = Status.NOT_CONVERGED  # least squares gave up, or stopped on a failed point
         else:
-            status = "converged"
+            status = Status.CONVERGED
         n_iter = int(res.njev)
         if method == "fd":  # least_squares differenced by itself: its Jacobians are counted here
             evaluator.count_jacobians("fd", n_iter)
@@ -167,14 +167,15 @@ def run(evaluator, seed: int, budget: Budget, **settings) -> Outcome:
         J = np.asarray(res.jac)
         extra["condition_number"] = float(np.linalg.cond(J)) if J.size else float("nan")
         extra["singular_values"] = np.linalg.svd(J, compute_uv=False).tolist() if J.size else []
-        if status == "converged" and budget.target_objective is not None and 2 * res.cost < budget.target_objective:
-            status = "target"
+        if (status == Status.CONVERGED and budget.target_objective is not None
+                and 2 * res.cost < budget.target_objective):
+            status = Status.TARGET
     except BudgetExhausted:
         # iterations = Jacobians computed (least_squares' njev: 1 + accepted steps)
         n_iter = evaluator.n_jacobians if method == "exact" else termination.iterations + 1
         if method == "fd":
             evaluator.count_jacobians("fd", n_iter)
-        status, message = "budget", "evaluation budget exhausted"
+        status, message = Status.BUDGET, "evaluation budget exhausted"
     if method == "exact":
         extra["jacobian_methods"] = dict(evaluator.jacobian_methods)
         extra["jacobian_equivalents"] = evaluator.jacobian_equivalents
@@ -211,7 +212,7 @@ def run_pseudo_inverse(evaluator, seed: int, budget: Budget, s: SMSettings) -> O
     extra: dict = {"x_start": x.tolist(), "theta_start": evaluator.parameters.to_physical(x).tolist(),
                    "iterations": []}
     last_x, last_pi, best_pi = None, np.inf, np.inf
-    status, message, jac = "budget", "evaluation budget exhausted", None
+    status, message, jac = Status.BUDGET, "evaluation budget exhausted", None
     iteration = 0
     while evaluator.affords(n + 1):
         points, h = difference_points(x, s.diff_step)
@@ -220,7 +221,7 @@ def run_pseudo_inverse(evaluator, seed: int, budget: Budget, s: SMSettings) -> O
         if not np.all(ev.ok):
             failed = "the iterate" if not ev.ok[0] else "a difference point"
             reason = ev.reasons[int(np.argmin(ev.ok))]
-            status, message = "not_converged", f"{failed} failed at iteration {iteration}: {reason}"
+            status, message = Status.NOT_CONVERGED, f"{failed} failed at iteration {iteration}: {reason}"
             break
         r = ev.residuals[0]
         pi = float(ev.objective[0])
@@ -236,7 +237,8 @@ def run_pseudo_inverse(evaluator, seed: int, budget: Budget, s: SMSettings) -> O
         extra["iterations"].append({"iteration": iteration, "objective": pi, "max_step": float(np.abs(step).max()),
                                     "clipped": clipped})
         if np.abs(step).max() < s.step_tolerance:
-            status, message = "converged", f"projected step below {s.step_tolerance:g} after {iteration} iterations"
+            status = Status.CONVERGED
+            message = f"projected step below {s.step_tolerance:g} after {iteration} iterations"
             break
         if termination.update(pi):
             status, message = termination.reason, f"termination rule: {termination.reason}"
@@ -247,7 +249,10 @@ def run_pseudo_inverse(evaluator, seed: int, budget: Budget, s: SMSettings) -> O
         extra["condition_number"] = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
         extra["singular_values"] = sv.tolist()
     extra["final_clipped"] = extra["iterations"][-1]["clipped"] if extra["iterations"] else []
-    if status == "converged" and budget.target_objective is not None and last_pi < budget.target_objective:
-        status = "target"
+    if status == Status.CONVERGED and budget.target_objective is not None and last_pi < budget.target_objective:
+        status = Status.TARGET
     return Outcome(status, iteration, message=message, extra=extra, x_best=last_x,
                    objective=last_pi if last_x is not None else None)
+
+
+OPTIMIZER = Optimizer("sm", SMSettings, run)

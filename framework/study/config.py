@@ -29,6 +29,7 @@ from typing import Any
 from framework.core.errors import InputError
 from framework.core.textio import parse_override_value, read_yaml_file
 from framework.study.kinds import get_kind
+from framework.study.kinds.base import check_report
 from framework.study.schema import StudyHeader, format_error, validated
 
 __all__ = ["format_error", "load", "parse_value", "read_with_overrides", "set_path", "validate"]
@@ -63,7 +64,8 @@ def read_with_overrides(path: str | Path, overrides: list[str] | None = None, wh
 
 
 def validate(data: Any, source: str = "<config>", base_dir: Path | None = None) -> StudyHeader:
-    """Validate a config mapping against its run kind's schema; InputError naming file, field, value."""
+    """Validate a config mapping against its run kind's schema and report options
+(:func:`framework.study.kinds.base.check_report`); InputError naming file, field, value."""
     if not isinstance(data, dict):
         raise InputError(f"{source}: a study config must be a mapping, got {type(data).__name__}")
     kind_name = data.get("kind", "updating")
@@ -71,10 +73,13 @@ def validate(data: Any, source: str = "<config>", base_dir: Path | None = None) 
         kind = get_kind(kind_name)
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
-    cfg = validated(kind.Config, data, source, context={"base_dir": base_dir})
-    check = getattr(kind, "check", None)
-    if check is not None:
-        check(cfg, source, base_dir)
+    cfg = validated(kind.config, data, source, context={"base_dir": base_dir})
+    try:
+        check_report(kind, cfg.report)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    if kind.check is not None:
+        kind.check(cfg, source, base_dir)
     return cfg
 
 

@@ -2,10 +2,11 @@
 
 A run spec is a small, picklable dict::
 
-    {"run_id", "study", "kind", "label", "variant", "seed", "columns", "task"}
+    {"run_id", "study", "kind", "label", "variant", "seed", "columns", "task", "execution"}
 
 ``task`` is everything the run needs (the kind decides what); ``columns`` are the settings
-that distinguish this run, written as typed columns into every table; ``run_id`` is a hash
+that distinguish this run, written as typed columns into every table; ``execution`` is how
+its model evaluations run (the config's ``execution`` section); ``run_id`` is a hash
 of what determines the run's result (the kind, its task's identity and the seed) and of
 nothing else: not the study name, output folder, backend, progress bars or report options.
 So ``--resume`` recognises a stored run, changing a figure option keeps every stored run,
@@ -89,11 +90,11 @@ def plan(cfg: StudyHeader) -> list[dict]:
 
 def _plan(cfg: StudyHeader) -> list[dict]:
     kind = get_kind(cfg.kind)
-    identity_of = getattr(kind, "identity", lambda task: task)
     names = column_names(list(cfg.sweep))
     specs: list[dict] = []
     seen: set[str] = set()
     for name, values, vcfg in expand(cfg):
+        execution = vcfg.execution.model_dump(mode="json")
         for part in kind.plan_runs(vcfg, values):
             relevant = {k: v for k, v in values.items() if k in part.get("relevant", values)}
             columns = {names[k]: _scalar(v) for k, v in relevant.items()}
@@ -106,8 +107,9 @@ def _plan(cfg: StudyHeader) -> list[dict]:
                 "seed": int(part["seed"]),
                 "columns": columns,
                 "task": part["task"],
+                "execution": execution,
             }
-            spec["run_id"] = run_id(cfg.kind, identity_of(part["task"]), spec["seed"])
+            spec["run_id"] = run_id(cfg.kind, kind.identity_of(part["task"]), spec["seed"])
             if spec["run_id"] in seen:
                 continue
             seen.add(spec["run_id"])

@@ -18,12 +18,13 @@ import yaml
 
 from framework.core.errors import InputError
 from framework.core.provenance import write_provenance
+from framework.core.status import Status
 from framework.core.tables import read_tables, write_table
 from framework.core.textio import read_text_file
 from framework.execution.parallel import dask_client, map_unordered
 from framework.report.figures import shape_figures
 from framework.study.execute import error_tables, execute_run
-from framework.study.kinds import get_kind
+from framework.study.kinds import base, get_kind
 from framework.study.plan import plan
 from framework.study.schema import StudyHeader
 from framework.study.shapes import write_shape_tables
@@ -33,13 +34,11 @@ log = logging.getLogger(__name__)
 
 
 def preflight(cfg: StudyHeader, specs: list[dict], build_references: bool = True) -> None:
-    """The kind's checks of every distinct input before any run starts (InputError).
+    """The kind's checks of every distinct input before any run starts (InputError naming the
+    config file and the study; :func:`framework.study.kinds.base.preflight`).
     ``build_references=False``: do not import code the config names (``gomu validate``)."""
-    check = getattr(get_kind(cfg.kind), "preflight", None)
-    if check is None:
-        return
     try:
-        check(specs, build_references=build_references)
+        base.preflight(get_kind(cfg.kind), specs, build_references=build_references)
     except InputError as exc:  # name the config file too, not only the data file or field
         raise _named(cfg, exc) from None
 
@@ -111,9 +110,9 @@ def run_study(
     finally:
         if client is not None:
             client.close()
-    tables = store.consolidate(wanted, kind.TABLES)
+    tables = store.consolidate(wanted, kind.tables)
     if (figures if shapes is None else shapes):
-        write_shape_tables(out, tables, cfg)  # mode shapes and MAC of the initial and best model
+        write_shape_tables(out, tables, cfg, kind, specs)  # mode shapes and MAC of the initial and best model
     derive(out, tables, cfg, figures=figures)
     return tables
 
@@ -129,10 +128,9 @@ def derive(out: Path, tables: dict[str, pd.DataFrame], cfg: StudyHeader, figures
     if not counts.empty:
         write_table(counts, out / "failures")
         written.append(out / "failures.csv")
-    analyses = getattr(kind, "analyses", None)
-    if analyses is not None:
+    if kind.analyses is not None:
         try:
-            derived = analyses(tables, cfg.report)
+            derived = kind.analyses(tables, cfg.report)
         except InputError:
             raise
         except Exception as exc:
@@ -142,10 +140,9 @@ def derive(out: Path, tables: dict[str, pd.DataFrame], cfg: StudyHeader, figures
             write_table(df, out / name)
             written.append(out / f"{name}.csv")
             tables = {**tables, name: df}
-    draw = getattr(kind, "figures", None)
-    if figures and draw is not None:
+    if figures and kind.figures is not None:
         try:
-            written += list(draw(tables, out, cfg.report))
+            written += list(kind.figures(tables, out, cfg.report))
         except Exception as exc:
             log.warning("figures of %s failed: %s", out, exc)
     if figures:
@@ -171,13 +168,18 @@ def report(results_dir: str | Path, shapes: bool = False) -> list[Path]:
         raise InputError(f"{config_path}: cannot be read ({type(exc).__name__})") from None
     cfg = validate(data, source=str(config_path))
     kind = get_kind(cfg.kind)
-    tables = read_tables(root, kind.TABLES)
+    tables = read_tables(root, kind.tables)
     if not tables or all(df.empty for df in tables.values()):
         raise InputError(f"{root}: no result tables to report on")
     if not (root / "provenance.json").exists():
         write_provenance(root, by="report")
     if shapes:
-        write_shape_tables(root, tables, cfg)
+        try:
+            specs = plan(cfg)
+        except InputError as exc:  # the shapes are an aid: the tables stay as they are
+            log.warning("mode-shape tables of %s not written: %s", root, exc)
+        else:
+            write_shape_tables(root, tables, cfg, kind, specs)
     return derive(root, tables, cfg)
 
 
@@ -224,6 +226,6 @@ def summary(tables: dict[str, pd.DataFrame]) -> pd.DataFrame:
     if "wall_s" in runs:
         out["wall_s_mean"] = g["wall_s"].mean().round(3)
     if "status" in runs:
-        out["failed"] = g["status"].apply(lambda s: int((s == "failed").sum()))
-        out["errors"] = g["status"].apply(lambda s: int((s == "error").sum()))
+        out["failed"] = g["status"].apply(lambda s: int((s == Status.FAILED).sum()))
+        out["errors"] = g["status"].apply(lambda s: int((s == Status.ERROR).sum()))
     return pd.DataFrame(out).reset_index()

@@ -28,8 +28,22 @@ Options (``ObjectiveSpec.options``):
 
       r_psi,i,d = sqrt(beta w_s,i) w_psi,i,d (psi_e,i(d) - psi_a,j(d)),   d != q_i
 
-  with w_psi,i,d = 1 / std_psi(d, i) for ``weights: std`` when shape standard deviations are
-  given (else 1). Residual layout: [r_lambda (m), mode 1's n_dof - 1 shape residuals, mode
+  With ``weights: unit`` or without shape standard deviations w_psi,i,d = 1 (the SMU
+  four-storey example's ones). With ``weights: std`` and shape standard deviations, the
+  option ``eigenvector_weights`` chooses (n_dof = number of measured DOFs):
+
+  - "entry" (default): w_psi,i,d = 1 / (n_dof std_psi(d, i)), the weights the SMU footbridge
+    example sets up (it divides 1/std by the number of measured DOFs).
+  - "smu_as_run": w_psi,i,d = 1 / (n_dof std_psi(i, 1)) for every entry d of mode i: the
+    weights the SMU package's objective code actually applies to that (n_dof x m) weight
+    matrix (it reads it with one index, psiWeights(i), which in column-major order is the
+    i-th entry of its first column), and so the weights of its published footbridge results
+    (SteelPedBridg_form2_*: fval 2.8474 at its best x, which this option reproduces to 4e-11,
+    where "entry" gives 2.1388). Use it only to compare with those results.
+
+  Until issue 27 "entry" omitted the factor 1 / n_dof (a bug against the SMU formulation it
+  claimed to follow); that objective is "entry" with ``beta`` = n_dof^2.
+  Residual layout: [r_lambda (m), mode 1's n_dof - 1 shape residuals, mode
   2's, ...]; an unmatched mode sets its n_dof residuals to sqrt(unmatched_penalty / n_dof).
   A simulated shape that is exactly 0 at q_i fails the evaluation ("zero_reference_entry").
   The objective vector stays [Pi_lambda, Pi_MAC], the second being the shape term either way.
@@ -64,7 +78,8 @@ from framework.updating.objectives import (
 MATCHING = ("order", "mac")
 WEIGHTS = ("std", "unit")
 SHAPE_TERMS = ("mac", "eigenvector")
-KNOWN_OPTIONS = {"matching", "weights", "shape_term"}
+EIGENVECTOR_WEIGHTS = ("entry", "smu_as_run")
+KNOWN_OPTIONS = {"matching", "weights", "shape_term", "eigenvector_weights"}
 
 
 def check_options(options: dict) -> None:
@@ -78,6 +93,9 @@ def check_options(options: dict) -> None:
         raise ValueError(f"weights must be one of {list(WEIGHTS)}, got {options['weights']!r}")
     if options.get("shape_term", "mac") not in SHAPE_TERMS:
         raise ValueError(f"shape_term must be one of {list(SHAPE_TERMS)}, got {options['shape_term']!r}")
+    if options.get("eigenvector_weights", "entry") not in EIGENVECTOR_WEIGHTS:
+        raise ValueError(f"eigenvector_weights must be one of {list(EIGENVECTOR_WEIGHTS)}, "
+                         f"got {options['eigenvector_weights']!r}")
 
 
 def _options(spec: ObjectiveSpec) -> tuple[str, str]:
@@ -142,16 +160,29 @@ def shape_weights(measured: MeasuredModes, weights: str) -> np.ndarray:
     return out
 
 
-def entry_weights(measured: MeasuredModes, weights: str) -> np.ndarray:
-    """w_psi,i,d = 1 / std_psi(d, i) per shape entry (n_dof, m), or 1 without standard deviations.
+def entry_weights(measured: MeasuredModes, weights: str, scheme: str = "entry") -> np.ndarray:
+    """Eigenvector-term weights w_psi,i,d (n_dof, m) of the module docstring: 1 without
+    standard deviations (or ``weights: unit``); else, for ``scheme`` "entry",
+    1 / (n_dof std_psi(d, i)), for "smu_as_run", 1 / (n_dof std_psi(i, 1)) down column i.
 
     The reference entries q_i (std 0 after normalization) are left out of the residuals, so a
-    zero standard deviation there is fine; anywhere else it is an input error."""
+    zero standard deviation there is fine; any other zero standard deviation in use is an
+    input error."""
     n_dof, m = len(measured.dofs), measured.n_modes
     if weights == "unit" or measured.shape_std is None or measured.shapes is None:
         return np.ones((n_dof, m))
-    q = reference_entries(measured.shapes)
     std = np.array(measured.shape_std, dtype=float)
+    if scheme == "smu_as_run":
+        if m > n_dof:
+            raise InputError(f"{measured.source}: eigenvector_weights 'smu_as_run' needs at most as many modes "
+                             f"({m}) as measured DOFs ({n_dof})")
+        first = std[:m, 0]  # psiWeights(i), i = 1..m, of the SMU code: column-major entry i of the matrix
+        if np.any(first <= 0):
+            i = int(np.flatnonzero(first <= 0)[0])
+            raise InputError(f"{measured.source}: shape_std of mode 1 at DOF {measured.dofs[i]!r} is zero; "
+                             "eigenvector_weights 'smu_as_run' cannot use it")
+        return np.broadcast_to(1.0 / (n_dof * first), (n_dof, m)).copy()
+    q = reference_entries(measured.shapes)
     std[q, np.arange(m)] = 1.0
     zero = np.argwhere(std <= 0)
     if zero.size:
@@ -160,7 +191,14 @@ def entry_weights(measured: MeasuredModes, weights: str) -> np.ndarray:
             f"{measured.source}: shape_std of mode {i + 1} at DOF {measured.dofs[d]!r} is zero; "
             "use weights 'unit' for the eigenvector term"
         )
-    return 1.0 / std
+    return 1.0 / (n_dof * std)
+
+
+def _eigenvector_weights(measured: MeasuredModes, spec: ObjectiveSpec) -> np.ndarray:
+    """w_psi,i,d sqrt(beta w_s,i) (n_dof, m) for the spec's options."""
+    _, weights = _options(spec)
+    scheme = (spec.options or {}).get("eigenvector_weights", "entry")
+    return entry_weights(measured, weights, scheme) * np.sqrt(spec.beta * measured.w_shape)[None, :]
 
 
 def _pairing(result: ModalResult, measured: MeasuredModes, spec: ObjectiveSpec):
@@ -207,11 +245,10 @@ def reference_residuals(result: ModalResult, measured: MeasuredModes, spec: Obje
 def _eigenvector_residuals(phi_a, corr: ModeCorrelation, measured: MeasuredModes, spec: ObjectiveSpec,
                            unmatched: float) -> np.ndarray:
     """Shape-entry differences (psi_e - psi_a) without the reference entries, mode after mode."""
-    _, weights = _options(spec)
     n_dof, m = len(measured.dofs), measured.n_modes
     q = reference_entries(measured.shapes)
     psi_e = normalize_at(measured.shapes, q)
-    w = entry_weights(measured, weights) * np.sqrt(spec.beta * measured.w_shape)[None, :]
+    w = _eigenvector_weights(measured, spec)
     out = np.full((m, n_dof - 1), unmatched)
     for i in np.flatnonzero(corr.matched):
         phi = phi_a[:, corr.analytical_index[i]]
@@ -238,7 +275,7 @@ def reference_jacobian(result: ModalResult, derivatives, corr: ModeCorrelation, 
     rows = measured_rows(result, measured) if shapes else None
     if eigenvector:
         q = reference_entries(measured.shapes)
-        w = entry_weights(measured, weights) * np.sqrt(spec.beta * measured.w_shape)[None, :]
+        w = _eigenvector_weights(measured, spec)
         n_dof = len(measured.dofs)
     elif shapes:
         w_psi = shape_weights(measured, weights) * np.sqrt(spec.beta * measured.w_shape)
@@ -263,8 +300,12 @@ def reference_jacobian(result: ModalResult, derivatives, corr: ModeCorrelation, 
 
 
 def reference_n_residuals(measured: MeasuredModes, spec: ObjectiveSpec) -> int:
-    """m eigenvalue terms, plus m MAC terms or m (n_dof - 1) eigenvector terms."""
+    """m eigenvalue terms, plus m MAC terms or m (n_dof - 1) eigenvector terms.
+
+    Called when the problem is built, so unusable eigenvector weights (a zero standard
+    deviation in use) are an input error there, not a failed evaluation later."""
     if use_shape_term(measured, spec) and _eigenvector_term(spec):
+        _eigenvector_weights(measured, spec)
         return measured.n_modes * len(measured.dofs)
     return spec_n_residuals(measured, spec)
 

@@ -25,8 +25,9 @@ import numpy as np
 import pandas as pd
 
 from framework.core.io import save_figure
+from framework.core.status import FAILURES
 
-FAILED = ("error", "failed")
+FAILED = FAILURES
 
 
 def _model_names(df: pd.DataFrame, by: list[str]) -> pd.Series:

@@ -39,8 +39,9 @@ import numpy as np
 import pandas as pd
 
 from framework.core.io import save_figure
+from framework.core.status import FAILURES
 
-FAILED = ("error", "failed")
+FAILED = FAILURES
 
 
 def _ratios(runs: pd.DataFrame, parameters: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:

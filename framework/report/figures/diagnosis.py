@@ -22,6 +22,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from framework.core.io import save_figure  # noqa: E402
+from framework.core.status import succeeded  # noqa: E402
 from framework.core.tables import write_table  # noqa: E402
 from framework.diagnosis.tables import diagnosis_tables  # noqa: E402
 
@@ -113,7 +114,7 @@ OUTCOME_COLORS = {
 def study_figure(cases: pd.DataFrame, path: Path) -> None:
     """Gap before/after per case (max frequency error, log scale), coloured by naming outcome;
     one panel per structure (the ``cases`` table)."""
-    ok = cases[cases["status"] == "completed"].copy()
+    ok = cases[cases["status"].map(succeeded).astype(bool)].copy()
     ok["outcome"] = np.select(
         [ok[c].astype(bool) for c in ("correct", "wrong", "false_discovery", "missed", "subset_named")],
         ["correct", "wrong", "false discovery", "missed", "partial (subset named)"],
@@ -141,7 +142,7 @@ def power_figure(cases: pd.DataFrame, path: Path) -> None:
     """Power curve: rate of the correct effect and location named against the hidden effect's
     magnitude, one line per noise level, one panel per structure (cases with the hidden
     effect among the candidates)."""
-    ok = cases[(cases["status"] == "completed") & (cases["hidden_effect"] != "none")]
+    ok = cases[cases["status"].map(succeeded).astype(bool) & (cases["hidden_effect"] != "none")]
     if "hidden_in_candidates" in ok:
         ok = ok[ok["hidden_in_candidates"].astype(bool)]
     structures = sorted(ok["structure"].unique())

@@ -3,13 +3,14 @@
 - :data:`FOUR_STORY` (``four_story``): the four-storey shear frame and its identified modes
   (a :class:`~framework.models.shear_building.ShearBuilding`, drawn as stacked floors);
 - :data:`FOOTBRIDGE` (``footbridge``): the 946-DOF steel footbridge and its five measured
-  modes with standard deviations (no coordinates: shapes drawn channel by channel).
+  modes with standard deviations (no coordinates: shapes drawn channel by channel), and the
+  reproduction rows of the SMU package's published optima (:mod:`.reproduction`).
 """
 
 from __future__ import annotations
 
 from framework.structures.descriptor import StructureDescriptor
-from framework.structures.smu import model
+from framework.structures.smu import model, reproduction
 
 FOUR_STORY = StructureDescriptor(
     name="four_story",
@@ -25,4 +26,5 @@ FOOTBRIDGE = StructureDescriptor(
     make_model=model.make_footbridge,
     measured=model.footbridge_measured,
     cases=("base",),
+    reproduction=reproduction.rows,
 )

@@ -1,51 +1,31 @@
-"""Run kinds: what one run of a study does. A static registry, name -> module.
+"""Run kinds: what one run of a study does. A static registry of :class:`~framework.study.kinds.base.Kind`
+objects, one line per kind.
 
-Every kind is a module with:
-
-- ``Config``: the pydantic schema of its studies (a subclass of
-  :class:`framework.study.schema.StudyHeader`; unknown keys rejected);
-- ``TABLES``: the names of the tables its runs write (the first is one row per run);
-- ``plan_runs(cfg, sweep_values) -> list[dict]``: the runs of one variant of the study, each
-  ``{"label", "seed", "task", "columns", "relevant"}``: ``task`` is everything the run needs
-  (plain data, picklable; its hash is the run's identity), ``columns`` the settings shown as
-  typed columns in every table, ``relevant`` the sweep keys that change this run (optional);
-- ``check(cfg, source, base_dir)``: checks that need more than the schema (data files),
-  raising InputError when the config is read; it imports no code named in the config;
-- ``preflight(specs, build_references=True)``: checks of every distinct input of the plan
-  (building models, reading data) before any run starts, raising InputError; with
-  ``build_references=False`` (``gomu validate`` without ``--build``) it imports no code named
-  in the config as ``module:function``;
-- ``run(spec) -> dict[table, list[row]]``: one run; a failure is data (a row with
-  ``status`` "error" or "failed"), it never ends the study;
-- ``identity(task) -> dict`` (optional): the part of the task that determines the result,
-  when the task also holds things that do not (e.g. a file's path next to its content hash);
-- ``analyses(tables, report) -> dict[name, DataFrame]`` (optional): derived tables, from the
-  tables only;
-- ``figures(tables, out_dir, report) -> list[Path]`` (optional): figures, from the tables only.
-
-The registry maps names to module paths and imports a module only when its kind is used,
-so no kind depends on the import order of another.
+Each kind is a module of this package that builds one ``KIND`` object (its schema, tables,
+``plan_runs``, ``run`` and optional hooks; :mod:`framework.study.kinds.base` says what each
+field means and what the engine does the same way for every kind: failure rows, the runner and
+isolation of model evaluations, preflight, report options, mode shapes). A new kind is a module
+``framework/study/kinds/<name>.py`` with its ``KIND`` and one line in :data:`KINDS`.
 """
 
 from __future__ import annotations
 
-import importlib
-from types import ModuleType
-
 from framework.core.errors import InputError
+from framework.study.kinds import analysis, damage, diagnose, identification, posterior, updating
+from framework.study.kinds.base import Kind
 
-KINDS: dict[str, str] = {
-    "updating": "framework.study.kinds.updating",
-    "identification": "framework.study.kinds.identification",
-    "analysis": "framework.study.kinds.analysis",
-    "diagnose": "framework.study.kinds.diagnose",
-    "posterior": "framework.study.kinds.posterior",
-    "damage": "framework.study.kinds.damage",
-}
+KINDS: dict[str, Kind] = {kind.name: kind for kind in (
+    updating.KIND,
+    identification.KIND,
+    analysis.KIND,
+    diagnose.KIND,
+    posterior.KIND,
+    damage.KIND,
+)}
 
 
-def get_kind(name: str) -> ModuleType:
-    """The module of run kind ``name``."""
+def get_kind(name: str) -> Kind:
+    """The run kind ``name``."""
     if not isinstance(name, str) or name not in KINDS:
         raise InputError(f"kind: unknown run kind {name!r}; known: {sorted(KINDS)}")
-    return importlib.import_module(KINDS[name])
+    return KINDS[name]

@@ -47,16 +47,22 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 
 from framework.core.errors import InputError, ModelEvaluationError
+from framework.core.status import Status
+from framework.study.kinds.base import ANALYSES, Kind, failure
 from framework.study.kinds.updating import (
     MeasuredConfig,
     ParametersConfig,
     StructureConfig,
     ValidationCase,
+    _names_code,
     build_problem,
+    check_named_code,
+    user_model,
 )
 from framework.study.kinds.updating import check as _check_files
 from framework.study.kinds.updating import identity as _identity
 from framework.study.schema import Strict, StudyHeader
+from framework.study.shapes import shape_states
 from framework.updating.objectives import ObjectiveSpec
 
 log = logging.getLogger(__name__)
@@ -129,15 +135,6 @@ class Config(StudyHeader):
             raise ValueError(f"give each pairing at most once and at least one, got {v}")
         return v
 
-    @field_validator("report")
-    @classmethod
-    def _report(cls, v):
-        from framework.report.analyses import check_report
-
-        try:
-            return check_report(v)
-        except InputError as exc:
-            raise ValueError(str(exc)) from None
 
 
 def check(cfg: Config, source: str, base_dir: Path | None = None) -> None:
@@ -163,27 +160,20 @@ def identity(task: dict) -> dict:
     return _identity(task)
 
 
-def preflight(specs: list[dict], build_references: bool = True) -> None:
-    """Build every run's problem and point before any run starts (InputError naming the study);
-    with ``build_references=False`` a task that names code (``module:function``) is not built."""
-    from framework.study.kinds.updating import _names_code, check_named_code
-
-    for spec in specs:
-        try:
-            if not build_references and _names_code(spec["task"]):
-                check_named_code(spec["task"])  # imports nothing
-                continue
-            problem = build_problem(spec["task"])
-            point_theta(problem.parameters, spec["task"]["point"], spec["label"])
-            if "type" in spec["task"]["pairings"] and "mode_types" not in (problem.measured.meta or {}):
-                raise InputError(f"pairings: 'type' needs the measured mode types (meta.mode_types) in "
-                                 f"{problem.measured.source}")
-            for case in spec["task"]["validation"]:
-                build_problem(spec["task"], structure_options=case["structure_options"], measured_cfg=case["measured"])
-        except InputError as exc:
-            raise InputError(f"study {spec['study']!r}: {exc}") from None
-        except (KeyError, ValueError, TypeError) as exc:
-            raise InputError(f"study {spec['study']!r}: {type(exc).__name__}: {exc}") from None
+def preflight(spec: dict, build_references: bool = True) -> None:
+    """Build the run's problem and point before any run starts; with ``build_references=False``
+    a task that names code (``module:function``) is not built."""
+    task = spec["task"]
+    if not build_references and _names_code(task):
+        check_named_code(task)  # imports nothing
+        return
+    problem = build_problem(task)
+    point_theta(problem.parameters, task["point"], spec["label"])
+    if "type" in task["pairings"] and "mode_types" not in (problem.measured.meta or {}):
+        raise InputError(f"pairings: 'type' needs the measured mode types (meta.mode_types) in "
+                         f"{problem.measured.source}")
+    for case in task["validation"]:
+        build_problem(task, structure_options=case["structure_options"], measured_cfg=case["measured"])
 
 
 def point_theta(params, point: dict, name: str = "") -> np.ndarray:
@@ -205,8 +195,9 @@ def point_theta(params, point: dict, name: str = "") -> np.ndarray:
 
 
 # ---- one run -----------------------------------------------------------------------------
-def run(spec: dict) -> dict[str, list[dict]]:
-    """Evaluate one point: objective, parameters, modes of every case, sensitivities."""
+def run(spec: dict, runner) -> dict[str, list[dict]]:
+    """Evaluate one point: objective, parameters, modes of every case, sensitivities; the model
+    is evaluated by ``runner`` (isolated for user code, as in an updating run)."""
     t0 = time.perf_counter()
     task = spec["task"]
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
@@ -216,22 +207,24 @@ def run(spec: dict) -> dict[str, list[dict]]:
     for p, value, ratio in zip(params, theta, params.to_ratio(theta)):
         tables["parameters"].append({"parameter": p.name, "unit": p.unit, "initial": p.initial, "lower": p.lower,
                                      "upper": p.upper, "value": float(value), "ratio": float(ratio)})
-    ev = problem.evaluate(params.to_normalized(theta)[None, :])
-    row = {"objective": float(ev.objective[0]), "status": "ok" if ev.ok[0] else "failed",
-           "error": "" if ev.ok[0] else str(ev.reasons[0]), "n_evaluations": 1, "wall_s": 0.0,
-           "condition_number": np.nan}
+    ev = problem.evaluate(params.to_normalized(theta)[None, :], runner)
+    row = {"objective": float(ev.objective[0]), "status": Status.OK, "error": "", "n_evaluations": 1,
+           "wall_s": 0.0, "condition_number": np.nan}
+    if not ev.ok[0]:
+        row.update(failure(str(ev.reasons[0])))
     cases = [("base", problem)] + [
         (c["case"], build_problem(task, structure_options=c["structure_options"], measured_cfg=c["measured"]))
         for c in task["validation"]]
     for case, case_problem in cases:
-        rows, n = mode_rows(case_problem, case_problem.parameters.from_dict(params.as_dict(theta)), task["pairings"])
+        rows, n = mode_rows(case_problem, case_problem.parameters.from_dict(params.as_dict(theta)), task["pairings"],
+                            runner)
         tables["modes"] += [{"case": case, **r} for r in rows]
         row["n_evaluations"] += n
     if task.get("sensitivity") and ev.ok[0]:
         try:
-            result = sensitivity(problem, theta, task["sensitivity"])
+            result = sensitivity(problem, theta, task["sensitivity"], runner)
         except ModelEvaluationError as exc:  # a failed step is a row, not the end of the run
-            row.update(status="failed", error=f"sensitivity: {exc}")
+            row.update(failure(f"sensitivity: {exc}"))
         else:
             row["condition_number"] = result.condition_number
             row["n_evaluations"] += len(params) + 1
@@ -243,14 +236,14 @@ def run(spec: dict) -> dict[str, list[dict]]:
     return tables
 
 
-def sensitivity(problem, theta: np.ndarray, options: dict):
+def sensitivity(problem, theta: np.ndarray, options: dict, runner=None):
     """:func:`framework.updating.sensitivity.sensitivity_matrix` at theta (bounds widened to
     [lo, hi] x initial when ``widen`` is given, so no step is clipped)."""
     from framework.updating.sensitivity import sensitivity_matrix
 
     widen = tuple(options["widen"]) if options.get("widen") else None
     return sensitivity_matrix(problem, theta0=theta, rel_step=options["rel_step"],
-                              include_mac=options["include_mac"], widen=widen)
+                              include_mac=options["include_mac"], widen=widen, runner=runner)
 
 
 def sensitivity_rows(result, theta: np.ndarray, f0: np.ndarray, rel_step: float) -> dict[str, list[dict]]:
@@ -271,13 +264,12 @@ def sensitivity_rows(result, theta: np.ndarray, f0: np.ndarray, rel_step: float)
     return out
 
 
-def mode_rows(problem, theta: np.ndarray, pairings: list[str]) -> tuple[list[dict], int]:
+def mode_rows(problem, theta: np.ndarray, pairings: list[str], runner=None) -> tuple[list[dict], int]:
     """Mode rows of one case at theta for each pairing, and the model evaluations spent."""
-    from framework.models.base import safe_modal
     from framework.updating.objectives import correlation_table
 
     measured = problem.measured
-    result = safe_modal(problem.model, problem.parameters.as_dict(theta))
+    result = _modal(problem.model, problem.parameters.as_dict(theta), runner)
     if isinstance(result, Exception):
         return [{"pairing": p, "mode": 0, "error": str(result)} for p in pairings], 1
     rows, n = [], 1
@@ -285,7 +277,7 @@ def mode_rows(problem, theta: np.ndarray, pairings: list[str]) -> tuple[list[dic
     for pairing in pairings:
         if pairing == "objective":
             try:
-                corr = problem.correlation_at(theta)
+                corr = problem.correlation_at(theta, runner)
             except ModelEvaluationError as exc:
                 rows.append({"pairing": pairing, "mode": 0, "error": str(exc)})
                 continue
@@ -299,6 +291,16 @@ def mode_rows(problem, theta: np.ndarray, pairings: list[str]) -> tuple[list[dic
             rows.append({"pairing": pairing, **r, **_model_columns(result, index[j]),
                          **{k: v[j] for k, v in data_columns.items()}})
     return rows, n
+
+
+def _modal(model, theta: dict, runner=None):
+    """The model's modes at theta (or its ModelEvaluationError): in process (``model.modal``)
+    when the runner is the in-process one, else through the runner (isolated worker)."""
+    from framework.models.base import modal_many, safe_modal
+
+    if runner is None or runner is modal_many:
+        return safe_modal(model, theta)
+    return runner(model, [theta])[0]
 
 
 def type_pairing(result, measured):
@@ -366,3 +368,15 @@ def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
     from framework.report.analyses import analysis_figures
 
     return analysis_figures(tables, out_dir, report)
+
+
+def shapes(cfg: Config, tables: dict, specs: list[dict]) -> list[tuple]:
+    """Mode shapes at every point of the variant with the most points, per structure."""
+    return shape_states(tables, specs, build_problem, best_run=False)
+
+
+KIND = Kind(
+    name="analysis", config=Config, tables=TABLES, plan_runs=plan_runs, run=run, check=check, identity=identity,
+    preflight=preflight, evaluates_model=True, user_code=user_model, report=ANALYSES, analyses=analyses,
+    figures=figures, shapes=shapes,
+)

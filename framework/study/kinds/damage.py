@@ -48,7 +48,8 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, StrictInt, field_validator, model_validator
 
-from framework.core.errors import InputError
+from framework.core.status import FAILURES, Status
+from framework.study.kinds.base import ANALYSES, Kind, failure, task_key
 from framework.study.schema import Strict, StudyHeader
 
 log = logging.getLogger(__name__)
@@ -112,23 +113,6 @@ class Config(StudyHeader):
             raise ValueError(f"give each procedure at most once and at least one, got {v}")
         return v
 
-    @field_validator("report")
-    @classmethod
-    def _report(cls, v):
-        from framework.report.analyses import check_report, damage_summary
-
-        try:
-            check_report(v)
-            damage_summary.check_options(**(v.get("damage_summary") or {}))
-            return v
-        except InputError as exc:
-            raise ValueError(str(exc)) from None
-        except TypeError as exc:  # an unknown option name
-            raise ValueError(f"report.damage_summary: {exc}") from None
-
-
-def check(cfg: Config, source: str, base_dir: Path | None = None) -> None:
-    """Nothing beyond the schema: the beam and its data are built in."""
 
 
 # ---- plan --------------------------------------------------------------------------------
@@ -149,19 +133,13 @@ def plan_runs(cfg: Config, sweep_values: dict) -> list[dict]:
     return parts
 
 
-def preflight(specs: list[dict], build_references: bool = True) -> None:
-    """Build the model and one measurement of every distinct task before any run starts."""
-    seen = set()
-    for spec in specs:
-        t = spec["task"]
-        key = (t["noise_pct"], t["measured_mesh"], t["n_modes"])
-        if key in seen:
-            continue
-        seen.add(key)
-        try:
-            measurements(t, spec["seed"])
-        except InputError as exc:
-            raise InputError(f"study {spec['study']!r}: {exc}") from None
+def preflight(spec: dict, build_references: bool = True) -> None:
+    """Build the model and one measurement of the run before any run starts."""
+    measurements(spec["task"], spec["seed"])
+
+
+def measurement_key(spec: dict) -> str:
+    return task_key(spec, ("noise_pct", "measured_mesh", "n_modes"))
 
 
 # ---- one run -----------------------------------------------------------------------------
@@ -216,7 +194,7 @@ class _Run:
 
     def count(self, result) -> None:
         self.n_evaluations += int(result.n_evaluations)
-        if result.status == "failed":
+        if result.status == Status.FAILED:
             self.failed.append(f"{result.algorithm}: {result.message}")
 
     def pi(self, state: str, ratios: np.ndarray) -> float:
@@ -231,7 +209,7 @@ class _Run:
         truth = self.truth[state]
         if not np.all(np.isfinite(ratios)):
             self.tables["states"].append({"method": method, "state": state, "objective": np.nan,
-                                          "n_evaluations": int(n_evaluations), "status": "failed", "tau": tau,
+                                          "n_evaluations": int(n_evaluations), "status": Status.FAILED, "tau": tau,
                                           "mean_abs_error": np.nan, "max_abs_error": np.nan})
             return
         estimate = ratios if baseline is None else 1.0 - (np.asarray(baseline, float) - ratios)
@@ -259,7 +237,7 @@ def run(spec: dict) -> dict[str, list[dict]]:
     {"single_objective": _single_objective, "nsga2": _nsga2, "tikhonov": _tikhonov}[procedure](r)
     r.tables["runs"].append({
         "objective": np.nan, "n_evaluations": r.n_evaluations, "wall_s": time.perf_counter() - t0,
-        "status": "failed" if r.failed else "ok", "error": "; ".join(r.failed),
+        **(failure("; ".join(r.failed)) if r.failed else {"status": Status.OK, "error": ""}),
     })
     return r.tables
 
@@ -274,7 +252,7 @@ def _single_objective(r: _Run) -> None:
         res = run_optimizer("pso", p, r.seed, _budget(task["pso"]["evaluations"]),
                             swarm_size=task["pso"]["swarm_size"])
         r.count(res)
-        pol = _sm(p, res.x_best if res.status != "failed" else p.parameters.x_initial, task["polish_evaluations"])
+        pol = _sm(p, res.x_best if res.status != Status.FAILED else p.parameters.x_initial, task["polish_evaluations"])
         r.count(pol)
         direct = _sm(p, p.parameters.x_initial, task["polish_evaluations"])
         r.count(direct)
@@ -302,9 +280,9 @@ def _nsga2(r: _Run) -> None:
     res = run_optimizer("nsga2", tp, r.seed, _budget(tp.evaluations_per_point * pop * gens), pop_size=pop,
                         n_generations=gens)
     r.count(res)
-    if res.status == "failed":
+    if res.status == Status.FAILED:
         for state in DAMAGED:
-            r.record("nsga2", state, np.full(10, np.nan), res.n_evaluations, "failed")
+            r.record("nsga2", state, np.full(10, np.nan), res.n_evaluations, Status.FAILED)
         return
     F, chosen = np.asarray(res.extra["pareto_F"]), int(res.extra["chosen_index"])
     for i, f in enumerate(F):
@@ -351,7 +329,8 @@ def _tikhonov(r: _Run) -> None:
                             swarm_size=task["pso"]["swarm_size"])
         r.count(res)
         r.record("pso_tikhonov", state, res.theta_best, n_eval + res.n_evaluations, res.status, tau=tau_star)
-        pol = _sm(pt, res.x_best if res.status != "failed" else pt.parameters.x_initial, task["polish_evaluations"])
+        start = res.x_best if res.status != Status.FAILED else pt.parameters.x_initial
+        pol = _sm(pt, start, task["polish_evaluations"])
         r.count(pol)
         r.record("pso_tikhonov+sm (ours)", state, pol.theta_best, n_eval + res.n_evaluations + pol.n_evaluations,
                  res.status, tau=tau_star)
@@ -377,3 +356,50 @@ def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
     from framework.report.analyses import analysis_figures
 
     return analysis_figures(tables, out_dir, _report(report))
+
+
+# ---- mode shapes -------------------------------------------------------------------------
+def shapes(cfg: Config, tables: dict, specs: list[dict]) -> list[tuple[str, object, dict[str, np.ndarray]]]:
+    """Beam damage studies (kind ``damage``): per damaged state, the 10-element model against
+    that state's measurement of the best estimate (lowest objective of the first planned
+    variant, e.g. the SPEC's 3 % noise), at the intact ratios (``initial``) and at that
+    method's own updated ratios (``updated``)."""
+    import pandas as pd
+
+    from framework.structures.beam import model as beam
+    from framework.updating.problem import UpdatingProblem
+
+    runs, states, elements = (tables.get(n) for n in ("runs", "states", "elements"))
+    if runs is None or states is None or elements is None or states.empty or elements.empty:
+        return []
+    first_variant = specs[0]["variant"]
+    by_key = {(s["label"], s["variant"], s["seed"]): s for s in specs}
+    keyed = runs.set_index("run_id")
+    out = []
+    for state in DAMAGED:
+        rows = states[(states["state"] == state) & ~states["status"].isin(FAILURES)
+                      & np.isfinite(pd.to_numeric(states["objective"], errors="coerce"))]
+        rows = rows[rows["run_id"].map(keyed["variant"]) == first_variant] if "variant" in keyed else rows
+        if rows.empty:
+            continue
+        best = rows.sort_values(["objective", "run_id", "method"]).iloc[0]
+        run = keyed.loc[best["run_id"]]
+        spec = by_key.get((run["label"], run["variant"], int(run["seed"])))
+        if spec is None:
+            continue
+        e = elements[(elements["run_id"] == best["run_id"]) & (elements["method"] == best["method"])
+                     & (elements["state"] == state)].sort_values("element")
+        task = spec["task"]
+        model = beam.make_model(n_modes=max(7, int(task["n_modes"])))
+        problem = UpdatingProblem(model, measurements(task, spec["seed"])[state])
+        ratios = e["updated_ratio"].to_numpy(float)
+        if ratios.size != len(problem.parameters):
+            continue
+        out.append((f"beam_{state}", problem, {"initial": np.ones(ratios.size), "updated": ratios}))
+    return out
+
+
+KIND = Kind(
+    name="damage", config=Config, tables=TABLES, plan_runs=plan_runs, run=run, preflight=preflight,
+    preflight_key=measurement_key, report=ANALYSES, analyses=analyses, figures=figures, shapes=shapes,
+)

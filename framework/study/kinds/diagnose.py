@@ -19,7 +19,7 @@ see ``studies/discrepancy.yaml``. A magnitude changes nothing when the hidden ef
 no free parameter (or none at all): such runs are planned once, with magnitude 1.
 
 Tables (:mod:`framework.diagnosis.tables`): ``summary`` (one row per run, with ``status``
-"completed" or "failed", ``error``, ``wall_s``, ``n_evaluations``, and every workflow
+"ok" or "failed" (:class:`framework.core.status.Status`), ``error``, ``wall_s``, ``n_evaluations``, and every workflow
 setting as a column), ``rounds``, ``candidates``, ``modes``, ``parameters``, ``comac``.
 Every table carries the columns ``structure`` and, for generated data, ``hidden_effect``,
 ``magnitude`` and ``noise``.
@@ -40,7 +40,6 @@ import functools
 import hashlib
 import json
 import logging
-import sys
 import time
 from pathlib import Path
 from typing import Any, Literal
@@ -49,27 +48,28 @@ from pydantic import (
     Field,
     StrictBool,
     StrictInt,
-    ValidationError,
     field_serializer,
     field_validator,
     model_validator,
 )
 
 from framework.core.errors import InputError, ModelEvaluationError
+from framework.core.status import Status, succeeded
 from framework.diagnosis.auto import with_candidates
-from framework.diagnosis.config import MeasuredSource, data_seed, measured_of, noise_of, source_kind
 from framework.diagnosis.effects import Catalogue
 from framework.diagnosis.score import NO_CHANGE
 from framework.diagnosis.tables import TABLES, diagnosis_rows
 from framework.diagnosis.workflow import DiagnoseSettings, diagnose
 from framework.structures import registry
 from framework.structures.registry import check_reference
+from framework.study.kinds.base import Kind, failure, task_key
+from framework.study.kinds.diagnose_measured import MeasuredSource, data_seed, measured_of, noise_of, source_kind
 from framework.study.schema import MAX_RUNS_PER_ENTRY, Strict, StudyHeader
 
 log = logging.getLogger(__name__)
 
-__all__ = ["TABLES", "Config", "analyses", "check", "diagnose_command", "figures", "identity", "plan_runs",
-           "preflight", "run"]  # fmt: skip
+__all__ = ["KIND", "TABLES", "Config", "analyses", "check", "figures", "identity", "plan_runs", "preflight",
+           "run"]  # fmt: skip
 
 #: where ``gomu diagnose`` writes a legacy config (``name:`` instead of ``study:``)
 LEGACY_ROOT = "results/discrepancy"
@@ -77,6 +77,8 @@ LEGACY_ROOT = "results/discrepancy"
 
 # ---- schema ------------------------------------------------------------------------------
 class ReportConfig(Strict):
+    """The ``report`` section (module docstring)."""
+
     outcomes: StrictBool = False
     showcase_seeds: list[StrictInt] = Field(default_factory=list)
 
@@ -129,19 +131,6 @@ class Config(StudyHeader):
     def _explicit_settings(self, settings: DiagnoseSettings) -> dict:
         """Only the settings the config gives (so variants and config.yaml keep the rest open)."""
         return settings.model_dump(mode="json", exclude_unset=True)
-
-    @field_validator("report")
-    @classmethod
-    def _report(cls, v):
-        try:
-            ReportConfig.model_validate(v)
-        except ValidationError as exc:
-            first = exc.errors()[0]
-            loc = ".".join(str(p) for p in first["loc"])
-            unknown = first["type"] == "extra_forbidden"
-            msg = f"unknown key; known: {sorted(ReportConfig.model_fields)}" if unknown else first["msg"]
-            raise ValueError(f"{loc}: {msg} (value: {first.get('input')!r})") from None
-        return v
 
     @model_validator(mode="after")
     def _seeded_runs(self):
@@ -260,30 +249,20 @@ def identity(task: dict) -> dict:
     return {**task, "measured": {**{k: v for k, v in measured.items() if k != "file"}, "file_sha256": digest}}
 
 
-def preflight(specs: list[dict], build_references: bool = True) -> None:
-    """Check every distinct catalogue, start model and data source before any run starts."""
-    seen = set()
-    for spec in specs:
-        task = spec["task"]
-        key = json.dumps({k: task[k] for k in ("structure", "structure_options", "start_effects", "measured",
-                                               "candidates")},
-                         sort_keys=True)  # fmt: skip
-        if key in seen or not (build_references or _trusted(task["structure"])):
-            continue  # a user's module is imported only with build_references (gomu validate --build, runs)
-        seen.add(key)
-        builtin = task["measured"].get("builtin") or ""
-        if not build_references and ":" in builtin:  # gomu validate imports no code named in the config
-            try:
-                check_reference(builtin, f"measured.builtin={builtin!r}")
-            except InputError as exc:
-                raise InputError(f"study {spec['study']!r}: {exc}") from None
-            continue
-        try:
-            _check_task(task)
-        except InputError as exc:
-            raise InputError(f"study {spec['study']!r}: {exc}") from None
-        except (KeyError, ValueError, TypeError) as exc:
-            raise InputError(f"study {spec['study']!r}: {type(exc).__name__}: {exc}") from None
+def preflight(spec: dict, build_references: bool = True) -> None:
+    """Check the run's catalogue, start model and data source before any run starts."""
+    task = spec["task"]
+    if not (build_references or _trusted(task["structure"])):
+        return  # a user's module is imported only with build_references (gomu validate --build, runs)
+    builtin = task["measured"].get("builtin") or ""
+    if not build_references and ":" in builtin:  # gomu validate imports no code named in the config
+        check_reference(builtin, f"measured.builtin={builtin!r}")
+        return
+    _check_task(task)
+
+
+def input_key(spec: dict) -> str:
+    return task_key(spec, ("structure", "structure_options", "start_effects", "measured", "candidates"))
 
 
 def _check_task(task: dict) -> None:
@@ -303,7 +282,7 @@ def _check_task(task: dict) -> None:
                              f"known: {sorted(known)}")  # fmt: skip
         noise_of(gen)
         return
-    measured = likelihood.with_noise_model(measured_of(task["measured"], catalogue, builtin=registry.builtin_measured))
+    measured = likelihood.with_noise_model(measured_of(task["measured"], catalogue))
     UpdatingProblem(catalogue.model(start), measured, objective=likelihood.objective_spec())
 
 
@@ -314,16 +293,16 @@ def run(spec: dict) -> dict[str, list[dict]]:
     task = spec["task"]
     catalogue = catalogue_of(task)
     try:
-        measured = measured_of(task["measured"], catalogue, spec["seed"], registry.builtin_measured)
+        measured = measured_of(task["measured"], catalogue, spec["seed"])
         task = {**task, "settings": settings_of(task, catalogue)}
         diagnosis = diagnose(catalogue, measured, DiagnoseSettings(**task["settings"]), start=task["start_effects"])
     except (ModelEvaluationError, InputError) as exc:
         log.warning("diagnosis %s seed %s failed: %s", spec["label"], spec["seed"], exc)
         tables = {t: [] for t in TABLES}
-        tables["summary"] = [{"status": "failed", "error": f"{type(exc).__name__}: {exc}", "n_evaluations": 0}]
+        tables["summary"] = [{**failure(exc), "n_evaluations": 0}]
     else:
         tables = diagnosis_rows(diagnosis)
-        tables["summary"][0] |= {"status": "completed", "error": ""}
+        tables["summary"][0] |= {"status": Status.OK, "error": ""}
         hidden = (measured.meta or {}).get("hidden")
         if hidden is not None:
             tables["summary"][0]["hidden_in_candidates"] = set(hidden) <= set(catalogue.candidate_effects())
@@ -389,7 +368,7 @@ def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
     written: list[Path] = []
     if summary is None or summary.empty:
         return written
-    done = summary[summary["status"] == "completed"]
+    done = summary[summary["status"].map(succeeded)]
     if len(summary) == 1 and len(done) == 1:
         case_figure(_run_tables(tables, done["run_id"].iloc[0]), out_dir / "discrepancy.png")
         written.append(out_dir / "discrepancy.png")
@@ -416,51 +395,7 @@ def _run_tables(tables: dict, run_id: str) -> dict:
     return {name: df[df["run_id"] == run_id] for name, df in tables.items() if "run_id" in df}
 
 
-# ---- gomu diagnose -----------------------------------------------------------------------
-def diagnose_command(path: str, overrides: list[str] | None = None, output: str | None = None) -> int:
-    """``gomu diagnose CONFIG``: run a one-run study of kind ``diagnose`` and print the verdict.
-
-    The config's ``kind`` may be left out; ``output`` replaces the config's.
-    """
-    from framework.study.config import read_with_overrides, validate
-    from framework.study.plan import plan
-    from framework.study.runner import run_study
-
-    data = read_with_overrides(path, overrides, what="diagnose config")
-    data.setdefault("kind", "diagnose")
-    if data["kind"] != "diagnose":
-        raise InputError(f"{path}: kind: gomu diagnose runs configs of kind 'diagnose', got {data['kind']!r}")
-    if output:
-        data["output"] = output
-    cfg = validate(data, source=str(path), base_dir=Path(path).parent)
-    n_runs = len(plan(cfg))
-    if n_runs != 1:
-        raise InputError(f"{path}: gomu diagnose runs one diagnosis, this config plans {n_runs}; "
-                         f"use gomu run {path}")  # fmt: skip
-    tables = run_study(cfg, progress=False)
-    s = tables["summary"].iloc[0]
-    out = cfg.output_dir()
-    if s["status"] != "completed":
-        sys.stderr.write(f"{cfg.study}: diagnosis failed: {s['error']}\ntables in {out}\n")
-        return 1
-    named = s["named_effect"]
-    if isinstance(s.get("named_location"), str) and s["named_location"]:
-        named += f" at {s['named_location']}"
-    if s.get("partial"):
-        named += " (partial explanation)"
-    lines = [
-        f"{cfg.study}: {s['conclusion']}",
-        f"rounds: {s['headline']}",
-        f"named effect(s): {named}",
-        f"gap before: max |freq error| {s['max_freq_error_pct_before']:.2f} %, min MAC {s['min_mac_before']:.3f}, "
-        f"unmatched {s['n_unmatched_before']} (chi2 {s['chi2_before']:.1f}, p {s['p_before']:.3g})",
-        f"gap after:  max |freq error| {s['max_freq_error_pct_after']:.2f} %, min MAC {s['min_mac_after']:.3f}, "
-        f"unmatched {s['n_unmatched_after']} (chi2 {s['chi2_after']:.1f}, p {s['p_after']:.3g})",
-        f"tables and figure in {out}",
-    ]
-    if isinstance(s.get("flags"), str) and s["flags"]:
-        lines.insert(3, f"flags: {s['flags']}")
-    if isinstance(s.get("noise_warning"), str) and s["noise_warning"]:
-        lines.insert(1, s["noise_warning"])
-    sys.stdout.write("\n".join(lines) + "\n")
-    return 0
+KIND = Kind(
+    name="diagnose", config=Config, tables=TABLES, plan_runs=plan_runs, run=run, check=check, identity=identity,
+    preflight=preflight, preflight_key=input_key, report=ReportConfig, analyses=analyses, figures=figures,
+)

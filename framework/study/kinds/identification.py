@@ -35,10 +35,12 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 import pandas as pd
-from pydantic import AfterValidator, Field, StrictBool, StrictInt, ValidationError, field_validator, model_validator
+from pydantic import AfterValidator, Field, StrictBool, StrictInt, field_validator, model_validator
 
 from framework.core.errors import InputError
-from framework.study.schema import MAX_RUNS_PER_ENTRY, NAME_PATTERN, Strict, StudyHeader, format_error
+from framework.core.status import Status
+from framework.study.kinds.base import Kind, failure
+from framework.study.schema import MAX_RUNS_PER_ENTRY, NAME_PATTERN, Strict, StudyHeader
 
 TABLES = ("runs", "modes", "identified", "shapes", "stability", "peaks", "frf")
 METHODS = ("n4sid", "ssi_cov", "peak_picking")
@@ -170,7 +172,17 @@ class ExportConfig(Strict):
 
 
 class ReportConfig(Strict):
+    """The ``report`` section: measured-modes files written from the identified modes."""
+
     export: dict[str, ExportConfig] = Field(default_factory=dict)
+
+    @field_validator("export")
+    @classmethod
+    def _file_names(cls, v):
+        for name in v:
+            if not NAME_PATTERN.match(name):
+                raise ValueError(f"file name {name!r} must be letters, digits and _ . + -")
+        return v
 
 
 class Config(StudyHeader):
@@ -188,18 +200,6 @@ class Config(StudyHeader):
                 raise ValueError(f"test name {name!r} must be letters, digits and _ . + -")
         return v
 
-    @field_validator("report")
-    @classmethod
-    def _report(cls, v):
-        try:
-            report = ReportConfig.model_validate(v)
-        except ValidationError as exc:
-            raise ValueError("; ".join(line.removeprefix("report: ") for line in
-                                       format_error(exc, "report").splitlines())) from None
-        for name in report.export:
-            if not NAME_PATTERN.match(name):
-                raise ValueError(f"export: file name {name!r} must be letters, digits and _ . + -")
-        return v
 
 
 def check(cfg: Config, source: str, base_dir=None) -> None:
@@ -287,23 +287,24 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
     return parts
 
 
-def preflight(specs: list[dict], build_references: bool = True) -> None:
+def preflight(spec: dict, build_references: bool = True) -> None:
     """Channels named in ``peak_picking.frf_channels`` exist (InputError before any run)."""
     from framework.structures.registry import campaign
 
-    seen = set()
-    for spec in specs:
-        task = spec["task"]
-        names = task["settings"].get("frf_channels")
-        key = (task["structure"], task["component"], json.dumps(names))
-        if not isinstance(names, list) or key in seen:
-            continue
-        seen.add(key)
-        known = campaign(task["structure"]).channels(task["component"])
-        unknown = [c for c in names if c not in known]
-        if unknown:
-            raise InputError(f"study {spec['study']!r}: tests.{spec['label']}.peak_picking.frf_channels: {unknown} "
-                             f"are not channels of {task['structure']} (component {task['component']}): {list(known)}")
+    task = spec["task"]
+    names = task["settings"].get("frf_channels")
+    if not isinstance(names, list):
+        return
+    known = campaign(task["structure"]).channels(task["component"])
+    unknown = [c for c in names if c not in known]
+    if unknown:
+        raise InputError(f"tests.{spec['label']}.peak_picking.frf_channels: {unknown} are not channels of "
+                         f"{task['structure']} (component {task['component']}): {list(known)}")
+
+
+def channels_key(spec: dict) -> str:
+    task = spec["task"]
+    return json.dumps([task["structure"], task["component"], task["settings"].get("frf_channels")])
 
 
 # ---- one run -----------------------------------------------------------------------------
@@ -316,7 +317,7 @@ def run(spec: dict) -> dict[str, list[dict]]:
     t0 = time.perf_counter()
     tests = campaign(task["structure"])
     tt = tests.test(task["test"])
-    summary = {"status": "ok", "error": "", "n_records": len(task["record_seeds"])}
+    summary = {"status": Status.OK, "error": "", "n_records": len(task["record_seeds"])}
     try:
         records = [tests.simulate(task["test"], seed, task["duration_s"], task["sampling_hz"], task["output_noise"],
                                   task["input_noise"], task["f_range_hz"], task["component"])
@@ -327,7 +328,7 @@ def run(spec: dict) -> dict[str, list[dict]]:
         else:
             final = _subspace(records, truth, task["method"], task["settings"], tt.free_decay, tables)
     except (InputError, ValueError, np.linalg.LinAlgError) as exc:  # e.g. a record too short for the block rows
-        summary.update(status="failed", error=f"{type(exc).__name__}: {exc}")
+        summary.update(failure(exc))
         tables = {t: [] for t in TABLES}
     else:
         found = [r for r in tables["modes"] if r["record"] == final and r["mode_label"] != "spurious"]
@@ -335,7 +336,7 @@ def run(spec: dict) -> dict[str, list[dict]]:
         summary.update(n_modes=n_modes, n_true=len(found), n_found=sum(r["stable"] == "yes" for r in found),
                        input_channel=",".join(records[0].input_labels))
         if n_modes == 0:
-            summary.update(status="failed", error="no mode identified")
+            summary.update(failure("no mode identified"))
     tables["runs"] = [{**summary, "wall_s": time.perf_counter() - t0}]
     return tables
 
@@ -420,3 +421,9 @@ def figures(tables: dict, out_dir, report: dict) -> list:
 
     export = {k: v.model_dump() for k, v in ReportConfig.model_validate(report).export.items()}
     return stability_figures(tables, out_dir) + frf_figures(tables, out_dir) + export_files(tables, out_dir, export)
+
+
+KIND = Kind(
+    name="identification", config=Config, tables=TABLES, plan_runs=plan_runs, run=run, check=check,
+    preflight=preflight, preflight_key=channels_key, report=ReportConfig, analyses=analyses, figures=figures,
+)

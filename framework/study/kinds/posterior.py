@@ -17,7 +17,8 @@ Every random draw comes from ``np.random.default_rng(seed)`` of the run. Tables:
 
 - ``runs``: structure, sampler settings, n_evaluations, acceptance, min_ess, max_rhat, chi2
   and n_data at the MAP point, log_evidence_laplace, log_evidence_nested (+ _error),
-  noise_assumed, simulated, wall_s, status, error;
+  noise_assumed, simulated, wall_s, status ("ok"; "error" with the message when the MAP point,
+  the sampler or the evidence raised; :class:`framework.core.status.Status`), error;
 - ``parameters``: run x parameter: unit, lower, upper, truth (simulated data), map, lin_std,
   lin_ci90_lower/upper, mean, std, median, ci90_lower/upper (5 % / 95 % quantiles), ess,
   rhat, mean_shift_std = (mean - map) / std, std_ratio = lin_std / std, covered_sampled,
@@ -41,14 +42,15 @@ import numpy as np
 from pydantic import Field, StrictInt
 
 from framework.core.errors import InputError
+from framework.core.status import Status
 from framework.study.kinds import updating
+from framework.study.kinds.base import Kind, failure
 from framework.study.schema import Strict, StudyHeader
 from framework.updating.objectives import ObjectiveSpec
 
 log = logging.getLogger(__name__)
 
 TABLES = ("runs", "parameters", "predictive", "identifiability", "draws")
-check = updating.check
 
 
 # ---- schema ------------------------------------------------------------------------------
@@ -114,18 +116,9 @@ def plan_runs(cfg: Config, sweep_values: dict) -> list[dict]:
     keys = ("structure", "measured", "validation", "parameters", "objective", "prior", "noise", "simulate",
             "sampler", "evidence", "map_starts", "predictive_draws", "store_draws")
     task = {k: data[k] for k in keys}
-    task["execution"] = data["execution"]
     columns = {"structure": cfg.structure.name, "sampler": cfg.sampler.name}
     return [{"label": "posterior", "seed": cfg.seed + i, "task": task, "columns": columns,
              "relevant": list(sweep_values)} for i in range(cfg.runs)]
-
-
-def identity(task: dict) -> dict:
-    return updating.identity(task)
-
-
-def preflight(specs: list[dict], build_references: bool = True) -> None:
-    updating.preflight(specs, build_references)
 
 
 # ---- problem -----------------------------------------------------------------------------
@@ -233,22 +226,16 @@ def paired_frequencies(problem, X: np.ndarray, runner=None) -> np.ndarray:
 
 
 # ---- one run -----------------------------------------------------------------------------
-def run(spec: dict) -> dict[str, list[dict]]:
-    task = spec["task"]
-    runner, close = updating.evaluation_runner(task.get("execution", {}))
-    try:
-        return _run(spec, task, runner)
-    finally:
-        close()
-
-
-def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
+def run(spec: dict, runner) -> dict[str, list[dict]]:
+    """One posterior run; ``runner`` evaluates the model, isolated for user code as in an
+    updating run (:func:`framework.study.kinds.base.evaluation_runner`)."""
     from framework.inference.evidence import laplace_log_evidence
     from framework.inference.likelihood import log_posterior_x
     from framework.inference.linearized import at_optimum
     from framework.inference.sampling import EVIDENCE_SAMPLERS, SAMPLERS
 
     t0 = time.perf_counter()
+    task = spec["task"]
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
     rng = np.random.default_rng(spec["seed"])
     problem, noise, prior, truth = build(task, rng)
@@ -257,7 +244,7 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
     s, e = task["sampler"], task["evidence"]
     row = {"n_walkers": s["walkers"], "n_steps": s["steps"], "burn": s["burn"], "evidence_sampler": e["name"],
            "noise_assumed": noise.assumed, "simulated": truth is not None, "n_data": noise.n_data,
-           "status": "completed", "error": ""}
+           "status": Status.OK, "error": ""}
     try:
         x_map = map_point(problem, noise, prior, rng, task["map_starts"], runner)
         lin = at_optimum(problem, x_map, noise, prior, runner)
@@ -279,7 +266,7 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
             row.update(log_evidence_nested=ev_res.log_evidence, log_evidence_nested_error=ev_res.log_evidence_error)
     except Exception as exc:  # a failed run is a row, never the end of the study
         log.debug("posterior run failed", exc_info=True)
-        row.update(status="error", error=f"{type(exc).__name__}: {exc}", wall_s=time.perf_counter() - t0)
+        row.update(**failure(exc, Status.ERROR), wall_s=time.perf_counter() - t0)
         tables["runs"].append(row)
         return tables
     row.update(n_evaluations=n_eval, acceptance=result.acceptance, min_ess=float(np.min(result.ess)),
@@ -393,3 +380,10 @@ def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
     from framework.report.figures.posterior import posterior_figures
 
     return posterior_figures(tables, out_dir)
+
+
+KIND = Kind(
+    name="posterior", config=Config, tables=TABLES, plan_runs=plan_runs, run=run, check=updating.check,
+    identity=updating.identity, preflight=updating.preflight, preflight_key=updating.problem_key,
+    evaluates_model=True, user_code=updating.user_model, analyses=analyses, figures=figures,
+)

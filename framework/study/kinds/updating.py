@@ -6,11 +6,12 @@ cases with the updated values. Tables:
 
 - ``runs``: one row per run: structure, algorithm, objective (best Pi), n_evaluations
   (model evaluations + eigen-solve equivalents of exact Jacobians), n_jacobians,
-  n_iterations, wall_s, status (target, stalled, converged, budget, max_iterations,
-  completed, failed, error), error, n_failed_evaluations, failures, message,
-  condition_number (SM), every optimizer setting as its own column, and the result columns an
-  adapter reports as ``extra["run_columns"]`` (hybrid: global_objective, global_evaluations,
-  local_evaluations, ...; multistart: n_starts_run, n_stopped_early, best_start);
+  n_iterations, wall_s, status (the optimizer's stop reason: target, stalled, converged, budget,
+  max_iterations, completed; or failed, error: :class:`framework.core.status.Status`), error,
+  n_failed_evaluations, failures, message, condition_number (SM), every optimizer setting as
+  its own column, and the result columns an adapter reports as ``extra["run_columns"]``
+  (hybrid: global_objective, global_evaluations, local_evaluations, ...; multistart:
+  n_starts_run, n_stopped_early, best_start);
 - ``parameters``: run x parameter: unit, initial, lower, upper, value, ratio, normalized
   (no rows for a failed run: a failed point is not an updated value);
 - ``modes``: run x case x measured mode: f_measured_hz, f_model_hz, error_pct, mac, matched;
@@ -33,15 +34,28 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import AfterValidator, ConfigDict, Field, StrictInt, ValidationError, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    ConfigDict,
+    Field,
+    SerializeAsAny,
+    StrictInt,
+    ValidationError,
+    field_serializer,
+    field_validator,
+    model_validator,
+)
 
 from framework.core.errors import InputError, ModelEvaluationError
 from framework.core.parameters import ParameterSet
+from framework.core.status import Status
 from framework.measured.load import load_measured
 from framework.measured.modes import MeasuredModes
-from framework.optimizers import OPTIMIZERS, Budget, run_optimizer, settings_model
+from framework.optimizers import OPTIMIZERS, Budget, Settings, run_optimizer
 from framework.structures.registry import builtin_measured, check_reference, is_reference, make_structure
-from framework.study.schema import Strict, StudyHeader, evaluation_isolation
+from framework.study.kinds.base import ANALYSES, Kind, task_key
+from framework.study.schema import Strict, StudyHeader
+from framework.study.shapes import shape_states
 from framework.updating.objectives import ObjectiveSpec
 from framework.updating.problem import UpdatingProblem
 
@@ -124,31 +138,36 @@ class BudgetConfig(Budget):
 
 class AlgorithmConfig(Strict):
     algorithm: str
-    settings: dict[str, Any] = Field(default_factory=dict)
+    #: the optimizer's settings: validated once, when the config is read, into the optimizer's
+    #: Settings object (:meth:`framework.optimizers.base.Optimizer.validate`), which the run
+    #: hands to the optimizer as it is; written back (config.yaml, variants) as given
+    settings: SerializeAsAny[Settings] = Field(default_factory=Settings)
     runs: StrictInt | None = Field(None, ge=1, le=100_000)
     budget: dict[str, Any] = Field(default_factory=dict)
     #: "pointwise": a population is evaluated one point per call (as the source's toolboxes;
     #: for timing), "batch": in one vectorized call where the model allows it (default)
     evaluation: Literal["batch", "pointwise"] = "batch"
 
-    @field_validator("algorithm")
+    @model_validator(mode="before")
     @classmethod
-    def _known(cls, v: str) -> str:
-        if v not in OPTIMIZERS:
-            raise ValueError(f"unknown algorithm {v!r}; known: {sorted(OPTIMIZERS)}")
-        return v
+    def _typed_settings(cls, data):
+        if not isinstance(data, dict) or not isinstance(data.get("algorithm"), str):
+            return data
+        name = data["algorithm"]
+        if name not in OPTIMIZERS:
+            raise ValueError(f"unknown algorithm {name!r}; known: {sorted(OPTIMIZERS)}")
+        try:
+            settings = OPTIMIZERS[name].validate(data.get("settings", {}))
+        except ValueError as exc:
+            raise ValueError(f"{exc} for algorithm {name!r}") from None
+        return {**data, "settings": settings}
+
+    @field_serializer("settings")
+    def _as_given(self, settings: Settings) -> dict:
+        return settings.model_dump(mode="json", exclude_unset=True)
 
     @model_validator(mode="after")
-    def _settings_valid(self):
-        try:
-            settings_model(self.algorithm).model_validate(self.settings, strict=True)
-        except ValidationError as exc:
-            first = exc.errors()[0]
-            loc = ".".join(str(p) for p in first["loc"])
-            msg = "unknown key" if first["type"] == "extra_forbidden" else first["msg"]
-            raise ValueError(
-                f"settings.{loc}: {msg} (value {first.get('input')!r}) for algorithm {self.algorithm!r}"
-            ) from None
+    def _budget_valid(self):
         try:
             Budget.model_validate(self.budget, strict=True)
         except ValidationError as exc:
@@ -179,16 +198,6 @@ class Config(StudyHeader):
             else:
                 data["options"] = options  # let the schema name the bad value
         return data
-
-    @field_validator("report")
-    @classmethod
-    def _report(cls, v):
-        from framework.report.analyses import check_report
-
-        try:
-            return check_report(v)
-        except InputError as exc:
-            raise ValueError(str(exc)) from None
 
     @field_validator("algorithms")
     @classmethod
@@ -231,11 +240,9 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
         _drop_empty_options(case.get("measured"))
     parts = []
     for label, alg in cfg.algorithms.items():
-        settings = settings_model(alg.algorithm).model_validate(alg.settings).model_dump(mode="json")
         budget = Budget.model_validate({**data["budget"], **alg.budget}).model_dump(mode="json")
         relevant = [k for k in sweep_values if not k.startswith("algorithms.") or k.startswith(f"algorithms.{label}.")]
-        task = {**common, "algorithm": alg.algorithm, "settings": settings, "budget": budget,
-                "execution": data["execution"]}
+        task = {**common, "algorithm": alg.algorithm, "settings": alg.settings, "budget": budget}
         if alg.evaluation != "batch":  # only when set: the ids of earlier runs stay
             task["evaluation"] = alg.evaluation
         columns = {"structure": cfg.structure.name, "algorithm": alg.algorithm}
@@ -257,9 +264,12 @@ def effective_objective(objective: dict) -> dict:
 
 
 def identity(task: dict) -> dict:
-    """What determines a run's result: the task without execution settings, with each data
-    file replaced by a hash of its content (so moving a file or the project keeps the id)."""
-    ident = {k: v for k, v in task.items() if k != "execution"}
+    """What determines a run's result, as plain data: the task, its optimizer settings as JSON
+    data (as validated, defaults filled in), each data file replaced by a hash of its content
+    (so moving a file or the project keeps the id)."""
+    ident = dict(task)
+    if isinstance(task.get("settings"), Settings):
+        ident["settings"] = task["settings"].model_dump(mode="json")
     ident["measured"] = _measured_identity(task["measured"])
     ident["validation"] = [{**c, "measured": _measured_identity(c["measured"])} for c in task["validation"]]
     return ident
@@ -313,34 +323,30 @@ def build_problem(task: dict, structure_options: dict | None = None, measured_cf
                            objective_from(task["objective"]))
 
 
-def preflight(specs: list[dict], build_references: bool = True) -> None:
-    """Build every distinct problem of the plan (model, data, parameters, objective) before any
-    run starts, so bad input fails early with an InputError naming the field and value.
+#: the task sections that make a run's problem (runs sharing them share one preflight)
+PROBLEM_KEYS = ("structure", "measured", "validation", "parameters", "objective")
+
+
+def problem_key(spec: dict) -> str:
+    return task_key(spec, PROBLEM_KEYS)
+
+
+def preflight(spec: dict, build_references: bool = True) -> None:
+    """Build the run's problems (model, data, parameters, objective; each validation case)
+    before any run starts, so bad input fails early with an InputError naming the field and value.
 
     With ``build_references=False`` (``gomu validate`` without ``--build``) code named in the
     config as ``module:function`` is not imported: only data files are read."""
-    seen = set()
-    for spec in specs:
-        task = spec["task"]
-        key = json.dumps({k: task[k] for k in ("structure", "measured", "validation", "parameters", "objective")},
-                         sort_keys=True, default=str)
-        if key in seen:
-            continue
-        seen.add(key)
-        cases = [(None, task["measured"])] + [(c["structure_options"], c["measured"]) for c in task["validation"]]
-        try:
-            if build_references or not _names_code(task):
-                for options, measured in cases:
-                    build_problem(task, structure_options=options, measured_cfg=measured)
-            else:  # the checks that import nothing
-                check_named_code(task)
-                for _, measured in cases:
-                    if not is_reference(measured.get("builtin") or ""):
-                        measured_from(measured)
-        except InputError as exc:
-            raise InputError(f"study {spec['study']!r}: {exc}") from None
-        except (KeyError, ValueError, TypeError) as exc:
-            raise InputError(f"study {spec['study']!r}: {type(exc).__name__}: {exc}") from None
+    task = spec["task"]
+    cases = [(None, task["measured"])] + [(c["structure_options"], c["measured"]) for c in task["validation"]]
+    if build_references or not _names_code(task):
+        for options, measured in cases:
+            build_problem(task, structure_options=options, measured_cfg=measured)
+    else:  # the checks that import nothing
+        check_named_code(task)
+        for _, measured in cases:
+            if not is_reference(measured.get("builtin") or ""):
+                measured_from(measured)
 
 
 def check_named_code(task: dict) -> None:
@@ -362,10 +368,17 @@ def _names_code(task: dict) -> bool:
     return any(is_reference(n) for n in names)
 
 
+def user_model(task: dict) -> bool:
+    """Is the task's model user code (``module:function`` outside ``framework``)? Its
+    evaluations are then isolated by default (``execution.isolate: auto``)."""
+    name = task["structure"]["name"]
+    return is_reference(name) and not name.startswith("framework.")
+
+
 # ---- one run -----------------------------------------------------------------------------
 def _evaluation_bar(spec: dict):
     """A progress bar over evaluations, for long runs executed in the foreground process."""
-    execution = spec["task"].get("execution", {})
+    execution = spec.get("execution", {})
     if not execution.get("progress_evaluations") or execution.get("backend", "serial") != "serial":
         return None
     from tqdm.auto import tqdm
@@ -374,53 +387,27 @@ def _evaluation_bar(spec: dict):
                 unit="eval", leave=False, position=1)
 
 
-def evaluation_runner(execution: dict, names_code: bool = False):
-    """The runner of a run's model evaluations from the ``execution`` section: backend
-    (serial, processes, dask), isolation of the model in a worker process (``isolate: auto``:
-    when the structure is user code, ``names_code``) and the per-evaluation timeout
-    (:func:`framework.study.schema.evaluation_isolation`,
-    :func:`framework.execution.parallel.make_evaluation_runner`)."""
-    from framework.execution.parallel import make_evaluation_runner
-
-    isolate, timeout_s = evaluation_isolation(execution, names_code)
-    return make_evaluation_runner(
-        execution.get("evaluation_backend", "serial"),
-        workers=execution.get("workers", 2),
-        isolate=isolate,
-        timeout_s=timeout_s,
-        scheduler=execution.get("scheduler"),
-    )
-
-
-def run(spec: dict) -> dict[str, list[dict]]:
-    """One optimizer run and the rows of every table."""
-    task = spec["task"]
-    name = task["structure"]["name"]
-    user_code = is_reference(name) and not name.startswith("framework.")  # isolate: auto
-    runner, close = evaluation_runner(task.get("execution", {}), user_code)
-    try:
-        return _run(spec, task, runner)
-    finally:
-        close()
-
-
 def _drop_empty_options(measured: dict | None) -> None:
     if isinstance(measured, dict) and not measured.get("options"):
         measured.pop("options", None)
 
 
-def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
+def run(spec: dict, runner) -> dict[str, list[dict]]:
+    """One optimizer run and the rows of every table; ``runner`` evaluates the model
+    (:func:`framework.study.kinds.base.evaluation_runner`)."""
+    task = spec["task"]
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
     problem = build_problem(task)
     bar = _evaluation_bar(spec)
     try:
-        result = run_optimizer(task["algorithm"], problem, spec["seed"], Budget(**task["budget"]), runner=runner,
+        result = run_optimizer(task["algorithm"], problem, spec["seed"], Budget(**task["budget"]),
+                               settings=task["settings"], runner=runner,
                                progress=bar.update if bar is not None else None,
-                               pointwise=task.get("evaluation") == "pointwise", **task["settings"])
+                               pointwise=task.get("evaluation") == "pointwise")
     finally:
         if bar is not None:
             bar.close()
-    failed = result.status == "failed"
+    failed = result.status == Status.FAILED
     tables["runs"].append({
         "objective": result.objective,
         "n_evaluations": result.n_evaluations,
@@ -433,7 +420,7 @@ def _run(spec: dict, task: dict, runner) -> dict[str, list[dict]]:
         "failures": result.failures,
         "message": result.message,
         "condition_number": result.extra.get("condition_number", np.nan),
-        **setting_columns(task["settings"]),
+        **setting_columns(task["settings"].model_dump(mode="json")),
         **result.extra.get("run_columns", {}),  # an adapter's own result columns (hybrid phases)
     })
     tables["history"] = history_rows(result.history)
@@ -518,3 +505,15 @@ def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
     from framework.report.figures.updating import updating_figures
 
     return updating_figures(tables, out_dir) + analysis_figures(tables, out_dir, report)
+
+
+def shapes(cfg: Config, tables: dict, specs: list[dict]) -> list[tuple]:
+    """Mode shapes at the initial point and at the best run's parameters, per structure."""
+    return shape_states(tables, specs, build_problem, best_run=True)
+
+
+KIND = Kind(
+    name="updating", config=Config, tables=TABLES, plan_runs=plan_runs, run=run, check=check, identity=identity,
+    preflight=preflight, preflight_key=problem_key, evaluates_model=True, user_code=user_model, report=ANALYSES,
+    analyses=analyses, figures=figures, shapes=shapes,
+)

@@ -19,7 +19,6 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Discriminator, Field, StrictInt, Tag, model_validator
 
-from framework.core.errors import InputError
 from framework.diagnosis.effects import Catalogue
 from framework.diagnosis.generate import NOISE_LEVELS, HiddenCase, Noise, generate
 from framework.measured.modes import MeasuredModes
@@ -110,18 +109,16 @@ def hidden_case(generate_cfg: dict, seed: int) -> HiddenCase:
     )
 
 
-def measured_of(measured: dict, catalogue: Catalogue, run_seed: int = 0, builtin=None) -> MeasuredModes:
-    """The measured modes named by a ``measured`` section (a plain dict, as in a run's task);
-    a built-in data set is loaded by ``builtin(name, case, **options)`` (the study layer
-    passes the structure registry's :func:`~framework.structures.registry.builtin_measured`)."""
+def measured_of(measured: dict, catalogue: Catalogue, run_seed: int = 0) -> MeasuredModes:
+    """The measured modes named by a ``measured`` section (a plain dict, as in a run's task)."""
     if measured.get("file") is not None:
         from framework.measured.modes import load as load_modes
 
         return load_modes(measured["file"])
     if measured.get("builtin") is not None:
-        if builtin is None:
-            raise InputError(f"measured.builtin={measured['builtin']!r}: no loader of built-in data sets given")
-        return builtin(measured["builtin"], measured.get("case", "base"), **(measured.get("options") or {}))
+        from framework.structures.registry import builtin_measured
+
+        return builtin_measured(measured["builtin"], measured.get("case", "base"), **(measured.get("options") or {}))
     gen = measured["generate"]
     for effect in gen.get("hidden", {}):
         catalogue.effect(effect)  # names an unknown effect
