@@ -32,8 +32,9 @@ def test_providers_come_from_the_structure_descriptors_in_registry_order():
     from framework.structures.beam.reproduction import rows as beam
     from framework.structures.bridge.reproduction import rows as bridge
     from framework.structures.lab_frame.reproduction import rows as lab_frame
+    from framework.structures.smu.reproduction import rows as smu
 
-    assert PROVIDERS == [lab_frame, bridge, beam]
+    assert PROVIDERS == [lab_frame, bridge, beam, smu]
 
 
 def test_missing_tables_give_not_run_rows(tmp_path):
