@@ -166,7 +166,7 @@ def test_cli_runs_an_analysis_config_and_report_redraws_its_figures(tmp_path):
     assert main(["report", str(out)]) == 0
     for name in ("sensitivity.png", "parameter_correlation.png", "singular_values.png", "frequencies.png",
                  "mode_errors.png"):
-        assert (out / name).stat().st_size > 10_000, name
+        assert (out / name).stat().st_size > 5_000, name
     summary = pd.read_csv(out / "sensitivity_summary.csv")
     top = summary[summary["label"] == "initial"].set_index("parameter")
     assert top.loc["kyy", "mode_of_max"] == "1st y" and top["rank"].min() == 1

@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from framework.core.io import save_figure
 from framework.core.status import FAILURES
 
 FAILED = FAILURES
@@ -97,32 +96,10 @@ def tables(tables: dict[str, pd.DataFrame], by: list[str] | str = "variant") -> 
 
 
 def figures(tables: dict[str, pd.DataFrame], out_dir: Path, **_) -> list[Path]:
-    """comparison.png from the comparison table."""
-    import matplotlib.pyplot as plt
-    import seaborn as sns
+    """comparison.png from the comparison table (:mod:`framework.report.figures.comparison`)."""
+    from framework.report.figures.comparison import comparison_figure
 
     table = tables.get("comparison")
     if table is None or table.empty:
         return []
-    cases = list(dict.fromkeys(table["case"]))
-    from framework.report.figures.updating import mode_ticks
-
-    n_modes = table["mode"].nunique() if "mode" in table else 8
-    fig, axes = plt.subplots(1, len(cases), figsize=((0.9 * n_modes + 1.5) * len(cases) + 1.5, 4.2), sharey=True,
-                             squeeze=False)
-    for ax, case in zip(axes[0], cases):
-        d = table[table["case"] == case]
-        sns.barplot(data=d, x="mode" if "mode" in d else "mode_label", y="error_pct", hue="model", ax=ax)
-        ax.axhline(0.0, color="k", lw=0.6)
-        ax.set(title=case, xlabel="measured mode", ylabel="(f_model - f_measured) / f_measured [%]")
-        if "mode" in d and "f_measured_hz" in d:
-            ticks = mode_ticks(d)
-            ax.set_xticks(range(len(ticks)), list(ticks.values()), fontsize=7)
-        if ax is not axes[0][-1]:
-            ax.get_legend().remove()
-        else:
-            ax.legend(fontsize=7, title="best run of", title_fontsize=7, loc="upper left", bbox_to_anchor=(1, 1))
-    fig.suptitle("Updated frequencies and validation predictions (one bar: the best run of each model)")
-    path = Path(out_dir) / "comparison.png"
-    save_figure(fig, path, dpi=130)
-    return [path]
+    return [comparison_figure(table, Path(out_dir) / "comparison.png")]

@@ -13,9 +13,9 @@ Asked for with ``report: {damage_summary: {threshold: 0.05, figure_noise: [3.0]}
 - ``lcurve_choice``: per noise_pct, measured_mesh, seed, state: the chosen tau (corner of
   maximum curvature), its residual and solution norms and curvature.
 
-Figures (from these tables and the run tables only), per noise level in ``figure_noise``:
-element ratios and damage indices per method, NSGA-II's Pareto front and the L-curves of
-the first seed.
+Figures (from these tables and the run tables only, :mod:`framework.report.figures.damage_summary`),
+per noise level in ``figure_noise``: element ratios and damage indices per method, NSGA-II's
+Pareto front and the L-curves of the first seed.
 """
 
 from __future__ import annotations
@@ -103,86 +103,16 @@ def tables(tables: dict[str, pd.DataFrame], threshold: float = DEFAULT_THRESHOLD
 
 def figures(tables: dict[str, pd.DataFrame], out_dir: Path, threshold: float = DEFAULT_THRESHOLD,
             figure_noise: list | None = None) -> list[Path]:
-    """Element ratios, damage indices, Pareto front and L-curves per noise level."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from framework.core.io import save_figure
+    """Element ratios, damage indices, Pareto front and L-curves per noise level
+    (:mod:`framework.report.figures.damage_summary`)."""
+    from framework.report.figures.damage_summary import damage_figures
 
     threshold = _check(threshold)
-    di, lc, pareto = tables.get("damage_indices"), tables.get("lcurve"), tables.get("pareto")
+    di = tables.get("damage_indices")
     if di is None or di.empty:
         return []
     levels = sorted(set(di["noise_pct"])) if figure_noise is None else [float(v) for v in figure_noise]
-    paths: list[Path] = []
-    out_dir = Path(out_dir)
-    for noise in levels:
-        d = di[(di["noise_pct"] == noise) & (di["measured_mesh"] == "truth") & (di["state"] != "intact")]
-        if d.empty:
-            continue
-        methods = sorted(set(d["method"]))
-        fig, axes = plt.subplots(2, 1, figsize=(12, 8), sharex=True)
-        width = 0.8 / max(len(methods), 1)
-        for ax, state in zip(axes, ("state1", "state2")):
-            ds = d[d["state"] == state]
-            for k, method in enumerate(methods):
-                dm = ds[ds["method"] == method].sort_values("element")
-                ax.bar(dm["element"] - 0.4 + (k + 0.5) * width, dm["mean_damage_index"], width,
-                       yerr=dm["sd_damage_index"], label=method, capsize=1, error_kw={"lw": 0.6})
-            truth = ds.drop_duplicates("element").sort_values("element")
-            ax.scatter(truth["element"], truth["truth_damage_index"], marker="_", s=600, color="k", zorder=5,
-                       label="truth")
-            ax.axhline(threshold, ls="--", color="grey", lw=1, label="threshold")
-            ax.set_title(f"{state}, {noise:g} % shape noise: damage index 1 - r (mean, bar = 1 sd over seeds)")
-            ax.set_ylabel("damage index")
-            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-        axes[-1].set_xlabel("element")
-        fig.tight_layout()
-        path = out_dir / f"damage_index_noise{noise:g}.png"
-        save_figure(fig, path, dpi=110, tight=False)
-        paths.append(path)
-        if pareto is not None and not pareto.empty:
-            p = pareto[(pareto["noise_pct"] == noise) & (pareto["measured_mesh"] == "truth")]
-            if len(p):
-                seed = int(p["seed"].min())
-                p = p[p["seed"] == seed]
-                fig, ax = plt.subplots(figsize=(5, 4))
-                ax.scatter(p["Pi_state1"], p["Pi_state2"], s=10, label="final Pareto front")
-                c = p[p["chosen"].astype(bool)]
-                ax.scatter(c["Pi_state1"], c["Pi_state2"], s=80, color="r", marker="*", label="nearest ideal point")
-                ax.set_xscale("log"), ax.set_yscale("log")
-                ax.set_xlabel("Pi state 1"), ax.set_ylabel("Pi state 2")
-                ax.set_title(f"NSGA-II, seed {seed}, {noise:g} % noise")
-                ax.legend()
-                fig.tight_layout()
-                path = out_dir / f"pareto_noise{noise:g}.png"
-                save_figure(fig, path, dpi=110, tight=False)
-                paths.append(path)
-        if lc is not None and not lc.empty:
-            c = lc[(lc["noise_pct"] == noise) & (lc["measured_mesh"] == "truth")]
-            if len(c):
-                seed = int(c["seed"].min())
-                fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-                for ax, state in zip(axes, ("state1", "state2")):
-                    d = c[(c["seed"] == seed) & (c["state"] == state)].sort_values("tau")
-                    ax.loglog(d["residual_norm"], d["solution_norm"], "o-", ms=3)
-                    for _, row in d.iloc[:: 4].iterrows():
-                        ax.annotate(f"{row['tau']:.0e}", (row["residual_norm"], row["solution_norm"]), fontsize=6)
-                    k = d[d["chosen"].astype(bool)]
-                    if len(k):
-                        ax.loglog(k["residual_norm"], k["solution_norm"], "r*", ms=14,
-                                  label=f"max curvature, tau={k['tau'].iloc[0]:.1e}")
-                        ax.legend()
-                    ax.set_xlabel("residual norm ||r|| = sqrt(Pi)")
-                    ax.set_ylabel("solution norm ||r_I - 1||")
-                    ax.set_title(f"L-curve {state}, seed {seed}, {noise:g} % noise")
-                fig.tight_layout()
-                path = out_dir / f"lcurve_noise{noise:g}.png"
-                save_figure(fig, path, dpi=110, tight=False)
-                paths.append(path)
-    return paths
+    return damage_figures(di, tables.get("pareto"), tables.get("lcurve"), Path(out_dir), threshold, levels)
 
 
 def comparison_wide(comparison: pd.DataFrame, noise_pct: float, mesh: str = "truth") -> pd.DataFrame:

@@ -14,27 +14,17 @@ studies); ``gomu report results/external/<study>`` writes, next to the study's t
   the normalized coordinates (0 = lower, 1 = upper bound) of its best point;
 - ``alphas.csv``: per method, the alpha values of the best run and the median over runs;
 - figures ``objective_distribution.png``, ``cost.png``, ``distinct_minima.png``,
-  ``alphas.png``.
+  ``alphas.png`` (:mod:`framework.report.figures.minima`).
 """
 
 from __future__ import annotations
 
 import json
-import logging
 import re
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-import seaborn as sns  # noqa: E402
-
-from framework.core.io import save_figure  # noqa: E402
-
-log = logging.getLogger(__name__)
+import numpy as np
+import pandas as pd
 
 
 def _natural_key(name: str) -> tuple:
@@ -177,75 +167,6 @@ def alpha_table(runs: pd.DataFrame, parameters: pd.DataFrame) -> pd.DataFrame:
     return out.merge(best_ids.rename(columns={"objective": "best_objective"}), on="method")
 
 
-# ---- figures -------------------------------------------------------------------------------
-def _save(fig, path: Path) -> None:
-    save_figure(fig, path, dpi=130)
-
-
-def plot_objectives(runs: pd.DataFrame, path: Path) -> None:
-    df = runs[runs["status"] != "error"].assign(method=_method(runs))
-    order = df.groupby("method")["objective"].median().sort_values().index.tolist()
-    fig, ax = plt.subplots(figsize=(7, 4.2))
-    sns.boxplot(data=df, x="method", y="objective", order=order, ax=ax, color="0.9", showfliers=False)
-    sns.stripplot(data=df, x="method", y="objective", order=order, ax=ax, size=4, alpha=0.7)
-    ax.set(yscale="log", xlabel="", ylabel="final objective",
-           title="Final objective, every run a point (box: quartiles; whiskers: 1.5 IQR)")
-    ax.tick_params(axis="x", rotation=20)
-    _save(fig, path)
-
-
-def plot_cost(runs: pd.DataFrame, path: Path) -> None:
-    df = runs[runs["status"] != "error"].assign(method=_method(runs))
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    sns.scatterplot(data=df, x="n_evaluations", y="objective", hue="method", ax=axes[0], alpha=0.8)
-    axes[0].set(yscale="log", xlabel="model evaluations", ylabel="final objective", title="Objective vs. cost")
-    sns.scatterplot(data=df, x="n_evaluations", y="wall_s", hue="method", ax=axes[1], alpha=0.8, legend=False)
-    axes[1].set(xlabel="model evaluations", ylabel="wall time [s]", title="Wall time vs. evaluations")
-    axes[0].legend(fontsize=7)
-    _save(fig, path)
-
-
-def plot_minima(minima: pd.DataFrame, names: list[str], path: Path, n_show: int = 8) -> None:
-    """Normalized parameters of the best distinct minima (parallel coordinates)."""
-    top = minima.head(n_show)
-    fig, ax = plt.subplots(figsize=(max(7, 0.55 * len(names) + 2), 4.5))
-    x = np.arange(len(names))
-    for _, row in top.iterrows():
-        ax.plot(
-            x,
-            row[names].to_numpy(float),
-            marker="o",
-            ms=3,
-            label=f"#{row['minimum']}: {row['objective_best']:.3g} ({row['n_points']} pts; {row['methods']})",
-        )
-    ax.set_xticks(x, names, rotation=60)
-    ax.set(ylim=(-0.03, 1.03), ylabel="normalized value (0 = lower, 1 = upper bound)", title="Distinct minima")
-    ax.legend(fontsize=6, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    _save(fig, path)
-
-
-def plot_alphas(parameters: pd.DataFrame, path: Path) -> None:
-    df = parameters.assign(method=_method(parameters))
-    n = df["parameter"].nunique()
-    fig, ax = plt.subplots(figsize=(max(6, 0.7 * n + 3), 4.2))
-    sns.stripplot(
-        data=df,
-        x="parameter",
-        y="value",
-        hue="method",
-        order=parameter_names(parameters),
-        dodge=True,
-        ax=ax,
-        size=3.5,
-        alpha=0.8,
-    )
-    ax.axhline(0.0, color="grey", lw=0.8, ls="--")
-    ax.set(ylabel="alpha (relative stiffness change)", title="Updated parameters, one point per run")
-    ax.tick_params(axis="x", rotation=60 if n > 6 else 0)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    _save(fig, path)
-
-
 # ---- driver -------------------------------------------------------------------------------
 def tables(tables: dict[str, pd.DataFrame], x_tol: float = 0.05, bound_tol: float = 1e-3) -> dict[str, pd.DataFrame]:
     """summary, bounds, alphas and minima tables from the runs, parameters and extra tables."""
@@ -267,23 +188,13 @@ def tables(tables: dict[str, pd.DataFrame], x_tol: float = 0.05, bound_tol: floa
 
 
 def figures(tables: dict[str, pd.DataFrame], out_dir: Path, **_) -> list[Path]:
-    """objective_distribution.png, cost.png, distinct_minima.png, alphas.png from the tables."""
-    root = Path(out_dir)
+    """objective_distribution.png, cost.png, distinct_minima.png, alphas.png from the tables
+    (:mod:`framework.report.figures.minima`)."""
+    from framework.report.figures.minima import minima_figures
+
     runs, parameters, minima = tables.get("runs"), tables.get("parameters"), tables.get("minima")
     if runs is None or parameters is None or minima is None:
         return []
-    names = parameter_names(parameters)
-    sns.set_theme(style="whitegrid", context="paper")
-    written = []
-    for fn, args, fname in (
-        (plot_objectives, (runs,), "objective_distribution.png"),
-        (plot_cost, (runs,), "cost.png"),
-        (plot_minima, (minima, names), "distinct_minima.png"),
-        (plot_alphas, (parameters,), "alphas.png"),
-    ):
-        try:
-            fn(*args, root / fname)
-            written.append(root / fname)
-        except Exception as exc:  # a figure must not lose the tables
-            log.warning("figure %s failed: %s", fname, exc)
-    return written
+    ok = runs[runs["status"] != "error"].assign(method=_method(runs))
+    return minima_figures(ok, parameters.assign(method=_method(parameters)), minima, parameter_names(parameters),
+                          Path(out_dir))

@@ -23,8 +23,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from framework.core.io import save_figure
-
 
 def convergence_summary(runs: pd.DataFrame, history: pd.DataFrame, tolerance: float = 1e-5,
                         reference_objective: float | None = None,
@@ -65,27 +63,6 @@ def convergence_summary(runs: pd.DataFrame, history: pd.DataFrame, tolerance: fl
     return pd.DataFrame(rows)
 
 
-def selection_figure(summary: pd.DataFrame, path: Path, title: str = "") -> None:
-    import matplotlib.pyplot as plt
-
-    df = summary.assign(setting=summary["label"] + " " + summary["variant"].astype(str))
-    fig, axes = plt.subplots(1, 2, figsize=(12, max(3.5, 0.35 * len(df) + 1.5)), sharey=True)
-    y = np.arange(len(df))
-    colors = np.where(df["converged"], "tab:blue", "tab:gray")
-    axes[0].barh(y, df["mean_evaluations_to_converge"].fillna(0), color=colors)
-    for i, (conv, val) in enumerate(zip(df["converged"], df["mean_evaluations_to_converge"])):
-        axes[0].text(0 if np.isnan(val) else val, i, "  not converged" if not conv else f"  {val:.0f}",
-                     va="center", fontsize=7)
-    axes[0].set(yticks=y, yticklabels=df["setting"], xlabel="mean evaluations to converge",
-                title="Evaluations to reach f* + tol (grey: not converged)")
-    axes[1].barh(y, df["mean_best"] - df["f_star"], color=colors)
-    axes[1].axvline(df["tolerance"].iloc[0], color="k", ls="--", lw=0.8)
-    axes[1].set(xscale="log", xlabel="mean best - f*", title="Mean best value above f*")
-    fig.suptitle(title)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=130, tight=False)
-
-
 def tables(tables: dict[str, pd.DataFrame], tolerance: float = 1e-5,
            reference_objective: float | None = None, absolute_threshold: float = 1e-5,
            title: str = "") -> dict[str, pd.DataFrame]:
@@ -97,10 +74,10 @@ def tables(tables: dict[str, pd.DataFrame], tolerance: float = 1e-5,
 
 
 def figures(tables: dict[str, pd.DataFrame], out_dir: Path, title: str = "", **_) -> list[Path]:
-    """selection.png from the convergence_summary table."""
+    """selection.png from the convergence_summary table (:mod:`framework.report.figures.selection`)."""
     summary = tables.get("convergence_summary")
     if summary is None or summary.empty:
         return []
-    path = Path(out_dir) / "selection.png"
-    selection_figure(summary, path, title or Path(out_dir).name)
-    return [path]
+    from framework.report.figures.selection import selection_figure
+
+    return [selection_figure(summary, Path(out_dir) / "selection.png", title or Path(out_dir).name)]

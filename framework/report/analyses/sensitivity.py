@@ -20,21 +20,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from framework.core.io import save_figure
-
 
 def _select(df: pd.DataFrame | None, variants: list[str] | None) -> pd.DataFrame | None:
     if df is not None and variants:
         df = df[df["variant"].isin(variants)]
     return None if df is None or df.empty else df
-
-
-def _panels(df: pd.DataFrame) -> list[tuple[str, str]]:
-    return list(dict.fromkeys(zip(df["variant"], df["label"])))
-
-
-def _title(variant: str, point: str) -> str:
-    return point if variant in ("", "default") else f"{variant}, {point}"
 
 
 def summary(sens: pd.DataFrame) -> pd.DataFrame:
@@ -59,52 +49,19 @@ def tables(tables: dict[str, pd.DataFrame], variants: list[str] | None = None) -
 
 
 def figures(tables: dict[str, pd.DataFrame], out_dir: Path, variants: list[str] | None = None, **_) -> list[Path]:
-    import matplotlib.pyplot as plt
-    import seaborn as sns
+    """sensitivity.png, parameter_correlation.png, singular_values.png of the tables there are
+    (:mod:`framework.report.figures.sensitivity`)."""
+    from framework.report.figures import sensitivity as draw
 
     out_dir = Path(out_dir)
     written = []
     sens = _select(tables.get("sensitivity"), variants)
     if sens is not None:
-        panels = _panels(sens)
-        fig, axes = plt.subplots(len(panels), 2, figsize=(12, 3.4 * len(panels)), squeeze=False)
-        for row, (variant, point) in zip(axes, panels):
-            sub = sens[(sens["variant"] == variant) & (sens["label"] == point)]
-            for ax, (col, ylabel, what) in zip(row, (("rel_sensitivity_frequency", "(df/f) / (dp/p)", "frequency"),
-                                                     ("rel_sensitivity_mac", "dMAC / (dp/p)", "MAC"))):
-                sns.barplot(data=sub, x="parameter", y=col, hue="mode_label", ax=ax)
-                ax.axhline(0.0, color="k", lw=0.5)
-                ax.set(xlabel="", ylabel=ylabel, title=f"{what} sensitivity ({_title(variant, point)})")
-                ax.legend(fontsize=6, ncol=2)
-                ax.tick_params(axis="x", rotation=20)
-        fig.tight_layout()
-        path = out_dir / "sensitivity.png"
-        save_figure(fig, path, dpi=120)
-        written.append(path)
+        written.append(draw.sensitivity_figure(sens, out_dir / "sensitivity.png"))
     corr = _select(tables.get("parameter_correlation"), variants)
     if corr is not None:
-        panels = _panels(corr)
-        fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.6), squeeze=False)
-        for ax, (variant, point) in zip(axes[0], panels):
-            sub = corr[(corr["variant"] == variant) & (corr["label"] == point)]
-            names = list(dict.fromkeys(sub["parameter"]))
-            matrix = sub.pivot(index="parameter", columns="parameter_other", values="correlation").loc[names, names]
-            sns.heatmap(matrix, annot=True, fmt=".2f", vmin=-1, vmax=1, cmap="RdBu_r", ax=ax, cbar=False,
-                        annot_kws={"fontsize": 7})
-            ax.set(xlabel="", ylabel="", title=f"parameter correlation ({_title(variant, point)})")
-        fig.tight_layout()
-        path = out_dir / "parameter_correlation.png"
-        save_figure(fig, path, dpi=120)
-        written.append(path)
+        written.append(draw.correlation_figure(corr, out_dir / "parameter_correlation.png"))
     ident = _select(tables.get("identifiability"), variants)
     if ident is not None:
-        fig, ax = plt.subplots(figsize=(6, 4))
-        for (variant, point), g in ident.groupby(["variant", "label"], sort=False):
-            ax.semilogy(g["index"], g["singular_value"], "o-",
-                        label=f"{_title(variant, point)} (condition {g['condition_number'].iloc[0]:.3g})")
-        ax.set(xlabel="index", ylabel="singular value of [S_f; S_MAC]", title="Singular values")
-        ax.legend(fontsize=7)
-        path = out_dir / "singular_values.png"
-        save_figure(fig, path, dpi=120)
-        written.append(path)
+        written.append(draw.singular_values_figure(ident, out_dir / "singular_values.png"))
     return written

@@ -21,9 +21,9 @@ Asked for with ``report: {updating_summary: {starts: sm, spread: pso}}``. Tables
 - ``updated_modes_best_run``: the base-case modes of the run with the lowest objective;
 - ``updated_modes_by_label``: the base-case modes of the best run of every label.
 
-Figures: ``updated_ratios.png`` (ratio per parameter, one point per run, by algorithm),
-``updated_errors.png`` (frequency error per mode, one point per run, lines at
-+-``error_band_pct``).
+Figures (:mod:`framework.report.figures.updating_summary`): ``updated_ratios.png`` (ratio
+per parameter, one point per run, by algorithm), ``updated_errors.png`` (frequency error per
+mode, one point per run, lines at +-``error_band_pct``).
 
 The minima's parameter vectors are in the problem's parameter order, which the sorted
 parameters table does not keep: it is recovered from the run's own best point (the best
@@ -38,7 +38,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from framework.core.io import save_figure
 from framework.core.status import FAILURES
 
 FAILED = FAILURES
@@ -137,35 +136,17 @@ def tables(tables: dict[str, pd.DataFrame], starts: str = "sm", spread: str = "p
 
 
 def figures(tables: dict[str, pd.DataFrame], out_dir: Path, error_band_pct: float = 3.0, **_) -> list[Path]:
-    import matplotlib.pyplot as plt
-    import seaborn as sns
+    """updated_ratios.png and updated_errors.png from the runs that did not fail
+    (:mod:`framework.report.figures.updating_summary`)."""
+    from framework.report.figures.updating_summary import errors_figure, ratios_figure
 
     runs, parameters, modes = (tables.get(n) for n in ("runs", "parameters", "modes"))
     if runs is None or parameters is None or parameters.empty:
         return []
     out_dir = Path(out_dir)
     ok = runs[~runs["status"].isin(FAILED)]["run_id"]
-    params = parameters[parameters["run_id"].isin(ok)]
-    lo, hi = float(params["lower"].min()), float(params["upper"].max())
-    fig, ax = plt.subplots(figsize=(9, 4))
-    sns.stripplot(data=params, x="parameter", y="ratio", hue="algorithm", dodge=True, ax=ax)
-    ax.axhline(1.0, color="k", lw=0.5)
-    ax.set(ylabel="updated / initial", title=f"Updated parameters, one point per run (bounds {lo:g}-{hi:g})")
-    save_figure(fig, out_dir / "updated_ratios.png", dpi=120)
-    written = [out_dir / "updated_ratios.png"]
+    written = [ratios_figure(parameters[parameters["run_id"].isin(ok)], out_dir / "updated_ratios.png")]
     if modes is not None and not modes.empty:
         base = modes[(modes["case"] == "base") & modes["run_id"].isin(ok) & (modes["mode"] > 0)]
-        fig, ax = plt.subplots(figsize=(9, 4))
-        sns.stripplot(data=base, x="mode", y="error_pct", hue="algorithm", dodge=True, ax=ax)
-        for sign in (1, -1):
-            ax.axhline(sign * error_band_pct, color="r", lw=0.5, ls="--")
-        from framework.report.figures.updating import mode_ticks
-
-        ticks = mode_ticks(base)
-        ax.set_xticks(range(len(ticks)), list(ticks.values()), fontsize=7)
-        ax.axhline(0.0, color="k", lw=0.5)
-        ax.set(xlabel="measured mode", ylabel="(f_model - f_measured) / f_measured [%]",
-               title=f"Updated vs measured frequencies, one point per run (dashed: +-{error_band_pct:g} %)")
-        save_figure(fig, out_dir / "updated_errors.png", dpi=120)
-        written.append(out_dir / "updated_errors.png")
+        written.append(errors_figure(base, out_dir / "updated_errors.png", error_band_pct))
     return written

@@ -1,4 +1,17 @@
-"""Figures of mode shapes and correlation, drawn from a results folder's tables only.
+"""Every figure of gomu, drawn from a results folder's tables only (never from a model or
+from in-memory state), one module per subject, each through :mod:`.style` (the one backend
+choice, style, resolution and file format; no other module imports matplotlib):
+
+- :mod:`.updating`: an updating study (convergence, parameters, frequencies, validation);
+- :mod:`.shapes` and :mod:`.correlation`: mode shapes, MAC, auto-MAC and COMAC of every
+  study with shape tables (:func:`shape_figures` below); :mod:`.interactive`: the shapes
+  as an HTML page (plotly);
+- :mod:`.modes`, :mod:`.sensitivity`, :mod:`.selection`, :mod:`.minima`,
+  :mod:`.comparison`, :mod:`.updating_summary`, :mod:`.damage_summary`: the figures of the
+  analyses of the same name (:mod:`framework.report.analyses` computes their tables and
+  calls these);
+- :mod:`.identification`, :mod:`.diagnosis`, :mod:`.posterior`: the figures of the run
+  kinds of the same name (a kind's ``figures`` hook calls them).
 
 ``shape_figures(out_dir)`` reads the tables written by :mod:`framework.study.shapes`
 (``geometry``, ``mode_shapes``, ``sensor_shapes``, ``mac_matrix``, ``comac``) and draws
@@ -15,27 +28,6 @@ from framework.report.figures.correlation import auto_mac_model_figure, comac_fi
 from framework.report.figures.shapes import model_modes_figure, paired_figure
 
 log = logging.getLogger(__name__)
-
-
-def save_compact(fig, path: str | Path, dpi: int = 100) -> Path:
-    """Write a figure as an 8-bit palette PNG (line drawings lose nothing visible; files are
-    3-4x smaller than matplotlib's RGBA PNG, which matters for committed 3-D figures)."""
-    import io
-
-    import matplotlib.pyplot as plt
-    from PIL import Image
-
-    from framework.core.io import atomic_write_bytes
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight")
-    plt.close(fig)
-    buf.seek(0)
-    image = Image.open(buf).convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT)
-    out = io.BytesIO()
-    image.save(out, format="PNG", optimize=True)
-    atomic_write_bytes(path, out.getvalue())
-    return Path(path)
 
 
 def shape_figures(out_dir: str | Path) -> list[Path]:

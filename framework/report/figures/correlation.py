@@ -14,15 +14,10 @@ from __future__ import annotations
 import textwrap
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-#: resolution of the shape and correlation figures (3-D panels with many lines make big files)
-SHAPE_DPI = 100
+from framework.report.figures.style import figure, save_figure, styled, subplots
 
 MAX_MODES = 20
 
@@ -57,6 +52,7 @@ def _heatmap(ax, df: pd.DataFrame, title: str, xlabel: str, ylabel: str):
     return im
 
 
+@styled
 def mac_figure(mac: pd.DataFrame, path: Path) -> Path | None:
     """Measured vs model MAC per state and the measured auto-MAC."""
     panels = [(f"MAC, measured vs model\n({state} parameters)", "model mode", "measured mode", d)
@@ -67,7 +63,7 @@ def mac_figure(mac: pd.DataFrame, path: Path) -> Path | None:
     if not panels:
         return None
     width = [max(4.0, 0.45 * d["j"].clip(upper=MAX_MODES).max() + 2.5) for *_, d in panels]
-    fig, axes = plt.subplots(1, len(panels), figsize=(sum(width), 4.8), squeeze=False,
+    fig, axes = subplots(1, len(panels), figsize=(sum(width), 4.8), squeeze=False,
                              gridspec_kw={"width_ratios": width, "wspace": 0.45})
     for k, (ax, (title, xl, yl, d)) in enumerate(zip(axes.ravel(), panels)):
         im = _heatmap(ax, d, title, xl, yl)
@@ -75,23 +71,25 @@ def mac_figure(mac: pd.DataFrame, path: Path) -> Path | None:
             ax.set_ylabel("")
             ax.tick_params(labelleft=False)
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="MAC")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
+@styled
 def auto_mac_model_figure(mac: pd.DataFrame, path: Path) -> Path | None:
     auto = mac[mac["kind"] == "auto_model"]
     if auto.empty:
         return None
     states = list(dict.fromkeys(auto["state"]))
     n = int(auto["j"].clip(upper=MAX_MODES).max())
-    fig, axes = plt.subplots(1, len(states), figsize=(len(states) * (0.42 * n + 3.0), 0.42 * n + 2.5), squeeze=False)
+    fig, axes = subplots(1, len(states), figsize=(len(states) * (0.42 * n + 3.0), 0.42 * n + 2.5), squeeze=False)
     for ax, state in zip(axes.ravel(), states):
         im = _heatmap(ax, auto[auto["state"] == state], f"auto-MAC of the model modes\nat the sensors ({state})",
                       "model mode", "model mode")
     fig.colorbar(im, ax=axes.ravel().tolist(), shrink=0.8, label="MAC")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
+@styled
 def comac_figure(comac: pd.DataFrame, geometry: pd.DataFrame | None, path: Path) -> Path | None:
     """COMAC per DOF (a marker per state) and, where DOFs have positions, on the geometry."""
     if comac.empty or comac["comac"].isna().all():
@@ -100,7 +98,7 @@ def comac_figure(comac: pd.DataFrame, geometry: pd.DataFrame | None, path: Path)
     dofs = list(dict.fromkeys(comac["dof"]))
     located = comac.dropna(subset=["x", "y", "z"])
     on_geometry = geometry is not None and not geometry.empty and located["dof"].nunique() > 3
-    fig = plt.figure(figsize=(max(6.0, 0.22 * len(dofs) + 3), 4.0 + (5.0 if on_geometry else 0)))
+    fig = figure(figsize=(max(6.0, 0.22 * len(dofs) + 3), 4.0 + (5.0 if on_geometry else 0)))
     ax = fig.add_axes([0.1, 0.62, 0.85, 0.33] if on_geometry else [0.1, 0.25, 0.85, 0.65])
     for k, state in enumerate(states):
         d = comac[comac["state"] == state].set_index("dof").reindex(dofs)
@@ -132,10 +130,4 @@ def comac_figure(comac: pd.DataFrame, geometry: pd.DataFrame | None, path: Path)
         fig.colorbar(sc, ax=gax, shrink=0.7, label=f"COMAC ({state}; lowest DOF at each sensor)")
         gax.set_title(f"COMAC at the sensors ({state} parameters)", fontsize=9)
         _frame(gax, geo)
-    return _save(fig, path)
-
-
-def _save(fig, path: Path) -> Path:
-    from framework.report.figures import save_compact
-
-    return save_compact(fig, path, dpi=SHAPE_DPI)
+    return save_figure(fig, path)

@@ -5,6 +5,9 @@
 - :func:`study_figure` (``study.png``): many diagnoses of data with hidden effects: the gap
   before against after per case, coloured by outcome (the ``cases`` table of
   :mod:`framework.diagnosis.outcomes`);
+- :func:`power_figure` (``power.png``): rate of the correct effect named against the hidden
+  effect's magnitude;
+- :func:`diagnosis_figures`: those of a ``diagnose`` study (the kind's ``figures`` hook);
 - :func:`write`: a diagnosis's tables (CSV + Parquet, atomic) and its figure, for the
   Python API (studies write through the engine's store instead).
 """
@@ -14,17 +17,13 @@ from __future__ import annotations
 import logging
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from framework.core.io import save_figure  # noqa: E402
-from framework.core.status import succeeded  # noqa: E402
-from framework.core.tables import write_table  # noqa: E402
-from framework.diagnosis.tables import diagnosis_tables  # noqa: E402
+from framework.core.status import succeeded
+from framework.core.tables import write_table
+from framework.diagnosis.tables import diagnosis_tables
+from framework.report.figures.style import save_figure, styled, subplots
 
 log = logging.getLogger(__name__)
 
@@ -40,11 +39,12 @@ def write(diagnosis, output: str | Path, figure: bool = True) -> dict[str, pd.Da
     return tables
 
 
+@styled
 def case_figure(tables: dict[str, pd.DataFrame], path: Path) -> None:
     """Four panels: frequency error and MAC per mode before/after, candidate Delta BIC, COMAC
     (the tables of one diagnosis)."""
     modes = tables["modes"]
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    fig, axes = subplots(2, 2, figsize=(11, 7.5))
     colors = {"before": "tab:red", "after": "tab:blue"}
     width = 0.38
     for k, stage in enumerate(("before", "after")):
@@ -97,8 +97,7 @@ def case_figure(tables: dict[str, pd.DataFrame], path: Path) -> None:
         ax.set(ylabel="COMAC", title="COMAC by sensor", ylim=(min(0.9, float(com["comac"].min()) - 0.02), 1.005))
         ax.legend(fontsize=7)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    save_figure(fig, path, dpi=110, tight=False)
+    save_figure(fig, path)
 
 
 OUTCOME_COLORS = {
@@ -111,6 +110,7 @@ OUTCOME_COLORS = {
 }
 
 
+@styled
 def study_figure(cases: pd.DataFrame, path: Path) -> None:
     """Gap before/after per case (max frequency error, log scale), coloured by naming outcome;
     one panel per structure (the ``cases`` table)."""
@@ -122,7 +122,7 @@ def study_figure(cases: pd.DataFrame, path: Path) -> None:
     )
     structures = sorted(ok["structure"].unique())
     n = max(len(structures), 1)
-    fig, axes = plt.subplots(1, n, figsize=(5.5 * n, 4.5), squeeze=False)
+    fig, axes = subplots(1, n, figsize=(5.5 * n, 4.5), squeeze=False)
     gaps = ["max_freq_error_pct_before", "max_freq_error_pct_after"]
     for ax, structure in zip(axes[0], structures):
         d = ok[ok["structure"] == structure]
@@ -135,9 +135,10 @@ def study_figure(cases: pd.DataFrame, path: Path) -> None:
         ax.set(xscale="log", yscale="log", xlabel="max |freq error| before (%)", ylabel="after (%)", title=structure)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    save_figure(fig, path, dpi=110, tight=False)
+    save_figure(fig, path)
 
 
+@styled
 def power_figure(cases: pd.DataFrame, path: Path) -> None:
     """Power curve: rate of the correct effect and location named against the hidden effect's
     magnitude, one line per noise level, one panel per structure (cases with the hidden
@@ -147,7 +148,7 @@ def power_figure(cases: pd.DataFrame, path: Path) -> None:
         ok = ok[ok["hidden_in_candidates"].astype(bool)]
     structures = sorted(ok["structure"].unique())
     n = max(len(structures), 1)
-    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.6), squeeze=False)
+    fig, axes = subplots(1, n, figsize=(4.2 * n, 3.6), squeeze=False)
     for ax, structure in zip(axes[0], structures):
         d = ok[ok["structure"] == structure]
         for noise, dd in d.groupby("noise"):
@@ -160,4 +161,41 @@ def power_figure(cases: pd.DataFrame, path: Path) -> None:
                ylim=(-0.03, 1.03))  # fmt: skip
         ax.legend(fontsize=6)
     fig.tight_layout()
-    save_figure(fig, path, dpi=110, tight=False)
+    save_figure(fig, path)
+
+
+def diagnosis_figures(tables: dict[str, pd.DataFrame], out_dir: Path, showcase_seeds=(),
+                      outcomes: bool = False) -> list[Path]:
+    """The figures of a ``diagnose`` study: ``discrepancy.png`` (a study of one run),
+    ``showcase/<case>.png`` (every run of the seeds ``showcase_seeds``; figures of runs no
+    longer shown are removed), ``study.png`` and ``power.png`` (``outcomes``: the ``cases`` table)."""
+    out_dir = Path(out_dir)
+    summary = tables.get("summary")
+    written: list[Path] = []
+    if summary is None or summary.empty:
+        return written
+    done = summary[summary["status"].map(succeeded)]
+    if len(summary) == 1 and len(done) == 1:
+        case_figure(_run_tables(tables, done["run_id"].iloc[0]), out_dir / "discrepancy.png")
+        written.append(out_dir / "discrepancy.png")
+    showcase = done[done["seed"].isin(list(showcase_seeds))]
+    folder = out_dir / "showcase"
+    names = showcase["case"].where(~showcase["case"].duplicated(keep=False),
+                                   showcase["case"] + "__" + showcase["run_id"].str[:8])  # fmt: skip
+    for run_id, name in zip(showcase["run_id"], names):
+        path = folder / f"{name}.png"
+        case_figure(_run_tables(tables, run_id), path)
+        written.append(path)
+    if folder.exists():  # figures of runs no longer shown
+        for stale in set(folder.glob("*.png")) - set(written):
+            stale.unlink()
+    if outcomes and tables.get("cases") is not None and not tables["cases"].empty:
+        study_figure(tables["cases"], out_dir / "study.png")
+        written.append(out_dir / "study.png")
+        power_figure(tables["cases"], out_dir / "power.png")
+        written.append(out_dir / "power.png")
+    return written
+
+
+def _run_tables(tables: dict, run_id: str) -> dict:
+    return {name: df[df["run_id"] == run_id] for name, df in tables.items() if "run_id" in df}

@@ -19,17 +19,9 @@ import numpy as np
 import pandas as pd
 
 from framework.identification.rows import INDICATOR
+from framework.report.figures.style import save_figure, styled, subplots
 
 SUBSPACE = ("n4sid", "ssi_cov")
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _of_run(table: pd.DataFrame | None, run_id: str, record: str | None = None) -> pd.DataFrame:
@@ -52,6 +44,7 @@ def _first_runs(runs: pd.DataFrame, methods: tuple[str, ...]) -> pd.DataFrame:
     return sel.sort_values("seed", kind="stable").drop_duplicates(["label", "variant", "method"])
 
 
+@styled
 def plot_stability(
     stability: pd.DataFrame,
     path: str | Path,
@@ -62,12 +55,9 @@ def plot_stability(
 ) -> Path:
     """Stability diagram: poles (order vs frequency), stable ones filled; optional selected
     frequencies (dashed) and a mode indicator (frequency, values) on a log axis behind."""
-    from framework.core.io import save_figure
-
-    plt = _pyplot()
     fmax = f_max_hz or float(stability["frequency_hz"].max())
     tab = stability[stability["frequency_hz"] <= fmax]
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig, ax = subplots(figsize=(8, 5))
     phys = tab[tab["physical"].astype(bool) & ~tab["stable"].astype(bool)]
     ax.plot(phys["frequency_hz"], phys["order"], "o", ms=3, mfc="none", mec="0.6", label="new / unstable")
     st = tab[tab["stable"].astype(bool)]
@@ -86,20 +76,18 @@ def plot_stability(
     ax.legend(loc="upper left", fontsize=8)
     ax.set_title(title or "stability diagram")
     fig.tight_layout()
-    return save_figure(fig, path, dpi=120, tight=False)
+    return save_figure(fig, path)
 
 
 #: channels drawn in an FRF figure (the mode indicator shows every channel)
 MAX_FRF_CHANNELS = 4
 
 
+@styled
 def plot_frf(frf: pd.DataFrame, path: str | Path, peaks: pd.DataFrame | None = None, title: str = "",
              input_label: str = "input") -> Path:
     """|H1| (log), phase and coherence of every channel of an ``frf`` table (one record)."""
-    from framework.core.io import save_figure
-
-    plt = _pyplot()
-    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True, gridspec_kw={"height_ratios": [2, 1, 1]})
+    fig, axes = subplots(3, 1, figsize=(8, 8), sharex=True, gridspec_kw={"height_ratios": [2, 1, 1]})
     stored = [c for c in dict.fromkeys(frf["channel"]) if c != INDICATOR]
     channels = stored[:MAX_FRF_CHANNELS]  # more overlaid curves are unreadable: the indicator sums them all
     indicator = frf[frf["channel"] == INDICATOR]
@@ -126,7 +114,7 @@ def plot_frf(frf: pd.DataFrame, path: str | Path, peaks: pd.DataFrame | None = N
              else f"{len(channels)} stored channel" + ("s" if len(channels) > 1 else ""))
     axes[0].set_title((title or "H1 FRF") + f"\n({shown} and the mode indicator)", fontsize=10)
     fig.tight_layout()
-    return save_figure(fig, path, dpi=120, tight=False)
+    return save_figure(fig, path)
 
 
 def _indicator(tables: dict, run: pd.Series) -> tuple[np.ndarray, np.ndarray] | None:

@@ -18,15 +18,10 @@ import logging
 import math
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-#: resolution of the shape and correlation figures (3-D panels with many lines make big files)
-SHAPE_DPI = 100
+from framework.report.figures.style import figure, save_figure, styled, subplots
 
 log = logging.getLogger(__name__)
 
@@ -134,6 +129,7 @@ def _node_disp(modes: pd.DataFrame, geo: Geometry) -> np.ndarray:
     return u
 
 
+@styled
 def model_modes_figure(geometry: pd.DataFrame, mode_shapes: pd.DataFrame, path: Path, state: str) -> Path | None:
     """The model's modes at ``state`` on the undeformed geometry."""
     geo = Geometry(geometry)
@@ -141,7 +137,7 @@ def model_modes_figure(geometry: pd.DataFrame, mode_shapes: pd.DataFrame, path: 
     modes = sorted(df["mode"].unique())[:MAX_PANELS]
     if not modes:
         return None
-    fig = plt.figure()
+    fig = figure()
     axes = _axes(fig, len(modes), geo.is_3d)
     scale = geo.fraction * geo.size
     seen: set = set()
@@ -156,9 +152,10 @@ def model_modes_figure(geometry: pd.DataFrame, mode_shapes: pd.DataFrame, path: 
         fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8, frameon=False)
     fig.suptitle(f"Model mode shapes ({state} parameters); grey: undeformed; largest translation drawn as "
                  f"{geo.fraction:.0%} of the structure's size", fontsize=10, y=1.02)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
+@styled
 def paired_figure(geometry: pd.DataFrame | None, mode_shapes: pd.DataFrame, sensors: pd.DataFrame, path: Path,
                   state: str) -> Path | None:
     """Each measured mode over its paired model mode at ``state``."""
@@ -171,7 +168,7 @@ def paired_figure(geometry: pd.DataFrame | None, mode_shapes: pd.DataFrame, sens
         return _paired_channels(s, measured, path, state)
     geo = Geometry(geometry)
     df = mode_shapes[mode_shapes["state"] == state]
-    fig = plt.figure()
+    fig = figure()
     axes = _axes(fig, len(measured), geo.is_3d)
     scale = geo.fraction * geo.size
     seen: set = set()
@@ -204,15 +201,16 @@ def paired_figure(geometry: pd.DataFrame | None, mode_shapes: pd.DataFrame, sens
     fig.suptitle(f"Measured shapes at the sensors over the paired model modes ({state} parameters); "
                  f"largest model translation drawn as {geo.fraction:.0%} of the structure's size",
                  fontsize=10, y=1.02)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
+@styled
 def _paired_channels(s: pd.DataFrame, measured: list, path: Path, state: str) -> Path:
     """Without geometry: shape value per measured DOF, model line and measured markers."""
     n = len(measured)
     cols = min(n, 2)
     rows = math.ceil(n / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(6.5 * cols, 2.6 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(6.5 * cols, 2.6 * rows), squeeze=False)
     for ax, i in zip(axes.ravel(), measured):
         si = s[s["measured_mode"] == i].sort_values("x")
         head = si.iloc[0]
@@ -229,10 +227,4 @@ def _paired_channels(s: pd.DataFrame, measured: list, path: Path, state: str) ->
     fig.suptitle(f"Measured and paired model shapes by channel ({state} parameters; the data hold no "
                  "coordinates)", fontsize=10)
     fig.tight_layout()
-    return _save(fig, path)
-
-
-def _save(fig, path: Path) -> Path:
-    from framework.report.figures import save_compact
-
-    return save_compact(fig, path, dpi=SHAPE_DPI)
+    return save_figure(fig, path)

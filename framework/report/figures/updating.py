@@ -17,15 +17,11 @@ import logging
 import textwrap
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
+import seaborn as sns
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-import seaborn as sns  # noqa: E402
-
-from framework.core.io import save_figure  # noqa: E402
+from framework.report.figures.style import save_figure, styled, subplots
 
 log = logging.getLogger(__name__)
 
@@ -36,9 +32,10 @@ def _group_label(df: pd.DataFrame) -> pd.Series:
     return df["label"]
 
 
+@styled
 def convergence(history: pd.DataFrame, path: Path) -> None:
     """Median and 10-90 % band of the best-so-far objective against evaluations."""
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    fig, ax = subplots(figsize=(7, 4.5))
     history = history.assign(group=_group_label(history))
     for group, h in history.groupby("group", sort=True):
         grid = np.unique(np.geomspace(1, max(2, h["evaluation"].max()), 200).astype(int))
@@ -64,9 +61,10 @@ def convergence(history: pd.DataFrame, path: Path) -> None:
         title="Convergence (median, 10-90 % over runs)",
     )
     ax.legend(fontsize=7)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
+@styled
 def parameter_spread(parameters: pd.DataFrame, path: Path) -> None:
     """Updated value per parameter and label: as a ratio to the initial value, or, where an
     initial value is 0 (ratio undefined, e.g. stiffness changes alpha), normalized to the bounds."""
@@ -80,7 +78,7 @@ def parameter_spread(parameters: pd.DataFrame, path: Path) -> None:
     else:
         y, ylabel, ref = "normalized", "updated value, normalized to bounds (0 = lower, 1 = upper)", None
     n = df["parameter"].nunique()
-    fig, ax = plt.subplots(figsize=(max(6, 1.2 * n + 2), 4.5))
+    fig, ax = subplots(figsize=(max(6, 1.2 * n + 2), 4.5))
     sns.stripplot(data=df, x="parameter", y=y, hue="group", dodge=True, ax=ax, size=4, alpha=0.8)
     if ref is not None:
         ax.axhline(ref, color="grey", lw=0.8, ls="--")
@@ -96,7 +94,7 @@ def parameter_spread(parameters: pd.DataFrame, path: Path) -> None:
                                           for p in names], fontsize=7)
     ax.set(ylabel=ylabel, title=f"Updated parameters, one point per run{note}")
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def mode_ticks(df: pd.DataFrame) -> dict[int, str]:
@@ -155,12 +153,13 @@ def _points_by_mode(ax, df: pd.DataFrame, y: str, ticks: dict[int, str]) -> None
                 fontsize=7, color="0.3")
 
 
+@styled
 def frequencies(modes: pd.DataFrame, path: Path, case: str = "base") -> None:
     """Frequency error and MAC of the updated model per measured mode: every run a point."""
     df = modes[(modes["case"] == case) & (modes["mode"] > 0)]
     df = df.assign(group=_group_label(df))
     ticks = mode_ticks(df)
-    fig, axes = plt.subplots(2, 1, figsize=(max(8, 1.1 * len(ticks) + 3), 8.5))
+    fig, axes = subplots(2, 1, figsize=(max(8, 1.1 * len(ticks) + 3), 8.5))
     _points_by_mode(axes[0], df, "error_pct", ticks)
     axes[0].axhline(0, color="k", lw=0.8)
     axes[0].set(ylabel="(f_model - f_measured) / f_measured [%]",
@@ -172,9 +171,10 @@ def frequencies(modes: pd.DataFrame, path: Path, case: str = "base") -> None:
     axes[0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.subplots_adjust(hspace=0.5)
     fig.suptitle("One point per run; bar: median over the runs of each algorithm", fontsize=9, y=0.95)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
+@styled
 def validation(modes: pd.DataFrame, path: Path) -> None:
     """Predicted - measured frequency per validation case and mode: every run a point."""
     df = modes[(modes["case"] != "base") & (modes["mode"] > 0)]
@@ -182,7 +182,7 @@ def validation(modes: pd.DataFrame, path: Path) -> None:
         return
     df = df.assign(group=_group_label(df))
     cases = list(dict.fromkeys(df["case"]))
-    fig, axes = plt.subplots(1, len(cases), figsize=(5.5 * len(cases), 4.4), squeeze=False, sharey=True)
+    fig, axes = subplots(1, len(cases), figsize=(5.5 * len(cases), 4.4), squeeze=False, sharey=True)
     for ax, case in zip(axes[0], cases):
         d = df[df["case"] == case]
         _points_by_mode(ax, d, "error_pct", mode_ticks(d))
@@ -190,14 +190,13 @@ def validation(modes: pd.DataFrame, path: Path) -> None:
         ax.set(title=f"validation case {case}", ylabel="(f_predicted - f_measured) / f_measured [%]")
     axes[0][0].legend(fontsize=7)
     fig.suptitle("Predictions of the updated models: one point per run; bar: median", fontsize=9, y=1.0)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def updating_figures(tables: dict[str, pd.DataFrame], out_dir: Path) -> list[Path]:
     """Every figure the tables of an updating study support; returns the files written."""
     root = Path(out_dir)
     written = []
-    sns.set_theme(style="whitegrid", context="paper")
     jobs = [
         ("history", convergence, "convergence.png"),
         ("parameters", parameter_spread, "parameters.png"),
@@ -215,7 +214,3 @@ def updating_figures(tables: dict[str, pd.DataFrame], out_dir: Path) -> list[Pat
         except Exception as exc:  # a figure must not lose the tables
             log.warning("figure %s failed: %s", name, exc)
     return written
-
-
-def _save(fig, path: Path) -> None:
-    save_figure(fig, path, dpi=130)

@@ -54,7 +54,7 @@ from pydantic import (
 )
 
 from framework.core.errors import InputError, ModelEvaluationError
-from framework.core.status import Status, succeeded
+from framework.core.status import Status
 from framework.diagnosis.auto import with_candidates
 from framework.diagnosis.effects import Catalogue
 from framework.diagnosis.score import NO_CHANGE
@@ -359,40 +359,12 @@ def analyses(tables: dict, report: dict) -> dict:
 
 
 def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
-    """discrepancy.png (a study of one run), showcase/<case>.png, study.png (see module docstring)."""
-    from framework.report.figures.diagnosis import case_figure, power_figure, study_figure
+    """discrepancy.png (a study of one run), showcase/<case>.png, study.png, power.png (see module
+    docstring), drawn by :func:`framework.report.figures.diagnosis.diagnosis_figures`."""
+    from framework.report.figures.diagnosis import diagnosis_figures
 
     options = ReportConfig.model_validate(report or {})
-    out_dir = Path(out_dir)
-    summary = tables.get("summary")
-    written: list[Path] = []
-    if summary is None or summary.empty:
-        return written
-    done = summary[summary["status"].map(succeeded)]
-    if len(summary) == 1 and len(done) == 1:
-        case_figure(_run_tables(tables, done["run_id"].iloc[0]), out_dir / "discrepancy.png")
-        written.append(out_dir / "discrepancy.png")
-    showcase = done[done["seed"].isin(options.showcase_seeds)]
-    folder = out_dir / "showcase"
-    names = showcase["case"].where(~showcase["case"].duplicated(keep=False),
-                                   showcase["case"] + "__" + showcase["run_id"].str[:8])  # fmt: skip
-    for run_id, name in zip(showcase["run_id"], names):
-        path = folder / f"{name}.png"
-        case_figure(_run_tables(tables, run_id), path)
-        written.append(path)
-    if folder.exists():  # figures of runs no longer shown
-        for stale in set(folder.glob("*.png")) - set(written):
-            stale.unlink()
-    if options.outcomes and tables.get("cases") is not None and not tables["cases"].empty:
-        study_figure(tables["cases"], out_dir / "study.png")
-        written.append(out_dir / "study.png")
-        power_figure(tables["cases"], out_dir / "power.png")
-        written.append(out_dir / "power.png")
-    return written
-
-
-def _run_tables(tables: dict, run_id: str) -> dict:
-    return {name: df[df["run_id"] == run_id] for name, df in tables.items() if "run_id" in df}
+    return diagnosis_figures(tables, out_dir, options.showcase_seeds, options.outcomes)
 
 
 KIND = Kind(

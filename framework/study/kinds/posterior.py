@@ -364,7 +364,7 @@ def analyses(tables: dict, report: dict) -> dict:
     """``coverage`` (runs with simulated data): per structure, method and parameter, the
     fraction of seeds whose 90 % interval holds the truth; ``agreement``: sampled vs linearized
     per run and parameter."""
-    from framework.report.figures.posterior import agreement_table, coverage_table
+    from framework.report.analyses.posterior import agreement_table, coverage_table
 
     out = {}
     cov = coverage_table(tables.get("parameters"))
