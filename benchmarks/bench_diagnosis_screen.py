@@ -19,7 +19,7 @@ import time
 from framework.diagnosis.auto import with_candidates
 from framework.diagnosis.generate import NOISE_LEVELS, HiddenCase, generate
 from framework.diagnosis.workflow import DiagnoseSettings, diagnose
-from framework.structures.frame_two_bay import model as frame_two_bay
+from framework.structures.frame_two_bay import effects as frame_two_bay
 
 CASES = ("member_stiffness_change", "added_brace", "level_mass_change", "semi_rigid_connections")
 

@@ -43,10 +43,11 @@ def _cmd_run(args) -> int:
 def _cmd_report(args) -> int:
     if args.reproduction:
         from framework.report.reproduction import write
+        from framework.structures.registry import reproduction_providers
 
         if not Path(args.reproduction).is_dir():
             raise InputError(f"report --reproduction: results folder {args.reproduction!r} not found")
-        sys.stdout.write(f"{write(args.reproduction, args.output)}\n")
+        sys.stdout.write(f"{write(args.reproduction, args.output, reproduction_providers())}\n")
         return 0
     if not args.results_dir:
         raise InputError("report: give a results folder, or --reproduction RESULTS")

@@ -167,12 +167,16 @@ def test_sm_starts_are_compared_per_method_and_pso_spread_per_label():
 
 def test_choices_table_comes_from_the_model_and_the_config():
     from framework.report.analyses import choices
+    from framework.study.structure_hooks import with_structure_choices
 
     points = pd.DataFrame({"study": ["s", "s"], "variant": ["old", "new"], "lateral_restraint": ["guided", None],
                            "deck_section": ["slab_overhangs", None], "cable_elements": [4, 4]})
     items = [{"item": "SM method", "value": "pseudo-inverse", "origin": "source-given", "reason": "SPEC 4"}]
-    new = choices.tables({"points": points}, structure={"name": "bridge", "variant": "new"}, items=items)["choices"]
-    old = choices.tables({"points": points}, structure={"name": "bridge", "variant": "old"})["choices"]
+    # the study layer passes the structure's modelling choices from its descriptor
+    report = with_structure_choices({"choices": {"structure": {"name": "bridge", "variant": "new"}, "items": items}})
+    new = choices.tables({"points": points}, **report["choices"])["choices"]
+    old = choices.tables({"points": points}, structure={"name": "bridge", "variant": "old"},
+                         modelling_choices=report["choices"]["modelling_choices"])["choices"]
     assert list(new.columns) == ["study", "item", "value", "origin", "reason"]
     assert set(new["origin"]) == {"source-given", "our assumption"} and (new["study"] == "s").all()
     lateral = {name: t.set_index("item").loc["bearing lateral restraint", "value"] for name, t in
@@ -183,10 +187,17 @@ def test_choices_table_comes_from_the_model_and_the_config():
     assert new["item"].iloc[-1] == "SM method"
     with pytest.raises(InputError, match="origin"):
         choices.tables({}, items=[{**items[0], "origin": "guess"}])
+    bridge_choices = report["choices"]["modelling_choices"]
     with pytest.raises(InputError, match="several variants"):
-        choices.tables({"points": points}, structure={"name": "bridge"})
+        choices.tables({"points": points}, structure={"name": "bridge"}, modelling_choices=bridge_choices)
     with pytest.raises(InputError, match="differs"):
-        choices.tables({"points": points.assign(variant="one")}, structure={"name": "bridge"})
+        choices.tables({"points": points.assign(variant="one")}, structure={"name": "bridge"},
+                       modelling_choices=bridge_choices)
+    with pytest.raises(InputError, match="'beam' documents no modelling choices"):
+        with_structure_choices({"choices": {"structure": {"name": "beam"}}})
+    with pytest.raises(InputError, match="not a built-in structure"):
+        with_structure_choices({"choices": {"structure": {"name": "nowhere"}}})
+
 
 
 def test_committed_initial_frequencies_before_and_after_against_the_source():

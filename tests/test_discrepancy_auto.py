@@ -24,7 +24,7 @@ from framework.diagnosis.outcomes import agreement, cases, targets  # noqa: E402
 from framework.diagnosis.tables import diagnosis_rows  # noqa: E402
 from framework.diagnosis.workflow import DiagnoseSettings, diagnose  # noqa: E402
 from framework.inference.evidence import laplace_log_evidence_chi2  # noqa: E402
-from framework.structures.frame_two_bay import model as frame_two_bay  # noqa: E402
+from framework.structures.frame_two_bay import effects as frame_two_bay  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "diagnosis"
@@ -105,7 +105,7 @@ def test_screened_auto_diagnosis_names_effect_and_location_with_every_round_in_t
 
 
 def test_out_of_candidate_effect_is_partial_never_explained():
-    from framework.diagnosis.effects import get_catalogue
+    from framework.structures.registry import catalogue as get_catalogue
 
     beam = with_candidates(get_catalogue("beam"), ["support_rotational_restraint", "localized_stiffness_loss"])
     data = generate(beam, HiddenCase({"midspan_mass": None}, {"midspan_mass_ratio": 0.3}, seed=1,

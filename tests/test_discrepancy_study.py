@@ -147,7 +147,7 @@ def test_study_config_holds_the_cases_of_the_committed_study():
     specs = plan(load(ROOT / "studies" / "discrepancy.yaml"))
     assert len(specs) == 240
     by_structure = pd.Series([s["columns"]["structure"] for s in specs]).value_counts().to_dict()
-    assert by_structure == {"beam": 108, "lab_frame": 42, "bridge": 12, "framework.structures.frame_two_bay.model:catalogue": 78}
+    assert by_structure == {"beam": 108, "lab_frame": 42, "bridge": 12, "frame_two_bay": 78}
     kinds = pd.Series([(s["columns"]["hidden_effect"], s["columns"]["data_stds"]) for s in specs
                        if s["columns"]["structure"] != "bridge"]).value_counts()  # fmt: skip
     assert kinds[("none", False)] == kinds[("none", True)] == 24  # null cases with and without stds

@@ -358,8 +358,8 @@ def bridge_truth():
 
 @pytest.mark.parametrize(("direction", "component"), [("vertical", "uz"), ("lateral", "uy")])
 def test_bridge_sweep_meets_acceptance_on_deck_modes(bridge_truth, direction, component):
-    from framework.identification.datasets import BRIDGE_SETTINGS
     from framework.structures.bridge import vibration_tests as bridge_tests
+    from framework.structures.bridge.campaign import SETTINGS as BRIDGE_SETTINGS
 
     # shortened record: 120 s sweep over 1-10 Hz instead of 391 s over 1-15 Hz
     full = bridge_tests.sweep(seed=21, direction=direction, duration_s=120.0, f_range_hz=(1.0, 10.0))
@@ -383,9 +383,9 @@ def test_bridge_sweep_meets_acceptance_on_deck_modes(bridge_truth, direction, co
 
 # ---------------------------------------------------------------------------- end to end
 def test_lab_update_from_identified_modes_recovers_true_parameters(lab_sweep):
-    from framework.identification.datasets import LAB_SETTINGS
     from framework.optimizers import Budget, run_optimizer
     from framework.structures.lab_frame import model as lab_frame
+    from framework.structures.lab_frame.campaign import SETTINGS as LAB_SETTINGS
     from framework.updating.problem import UpdatingProblem
 
     res = pl.identify(lab_sweep, LAB_SETTINGS)
@@ -402,13 +402,13 @@ def test_lab_update_from_identified_modes_recovers_true_parameters(lab_sweep):
 
 
 def test_identified_dataset_for_the_registry(truth):
-    from framework.identification.datasets import measured
+    from framework.structures.registry import builtin_measured
 
-    modes = measured("lab_frame")
+    modes = builtin_measured("identified", "lab_frame")
     assert modes.dofs == ("y", "x", "torsion") and modes.labels[0] == "1st y"
     np.testing.assert_allclose(modes.frequencies_hz, truth[0], rtol=0.005)
     with pytest.raises(InputError, match="unknown case 'x'"):
-        measured("x")
+        builtin_measured("identified", "x")
 
 
 # ---------------------------------------------------------------------------- run kind `identification`
@@ -576,7 +576,8 @@ def test_identification_config_errors_name_the_field(path, value, message):
 
 
 def test_shipped_config_uses_the_documented_settings_of_the_builtin_data():
-    from framework.identification.datasets import BRIDGE_SETTINGS, LAB_SETTINGS
+    from framework.structures.bridge.campaign import SETTINGS as BRIDGE_SETTINGS
+    from framework.structures.lab_frame.campaign import SETTINGS as LAB_SETTINGS
     from framework.study.config import load
     from framework.study.kinds.identification import method_settings
 
@@ -590,10 +591,10 @@ def test_shipped_config_uses_the_documented_settings_of_the_builtin_data():
 
 
 def test_committed_identified_modes_equal_the_builtin_data_set():
-    from framework.identification.datasets import measured
+    from framework.structures.registry import builtin_measured
 
     committed = load_modes(ROOT / "results" / "identification" / "lab_frame_identified.yaml")
-    builtin = measured("lab_frame")
+    builtin = builtin_measured("identified", "lab_frame")
     assert committed.labels == builtin.labels and committed.dofs == builtin.dofs
     np.testing.assert_allclose(committed.frequencies_hz, builtin.frequencies_hz, rtol=1e-12)
     np.testing.assert_allclose(committed.shapes, builtin.shapes, rtol=1e-10, atol=1e-12)

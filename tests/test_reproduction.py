@@ -6,18 +6,20 @@ from pathlib import Path
 
 from framework.cli import main
 from framework.report import reproduction
+from framework.structures.registry import reproduction_providers
 
 ROOT = Path(__file__).resolve().parents[1]
+PROVIDERS = reproduction_providers()
 
 
 def test_docs_reproduction_is_up_to_date_with_the_committed_tables():
-    expected = reproduction.render(reproduction.collect(ROOT / "results"))
+    expected = reproduction.render(reproduction.collect(ROOT / "results", PROVIDERS))
     text = (ROOT / "docs" / "reproduction.md").read_text(encoding="utf-8")
     assert text == expected, "docs/reproduction.md is stale: gomu report --reproduction results --output docs/reproduction.md"
 
 
 def test_every_row_has_the_report_columns_and_lab_and_bridge_are_there():
-    rows = reproduction.collect(ROOT / "results")
+    rows = reproduction.collect(ROOT / "results", PROVIDERS)
     assert all(tuple(r) == reproduction.COLUMNS for r in rows)
     studies = {r["study"] for r in rows}
     assert any("Laboratory frame" in s for s in studies) and any("footbridge" in s for s in studies)
@@ -26,8 +28,17 @@ def test_every_row_has_the_report_columns_and_lab_and_bridge_are_there():
     assert len(cong) == 4 and sum("the default" in r["choice"] for r in cong) == 1
 
 
+def test_providers_come_from_the_structure_descriptors_in_registry_order():
+    from framework.structures.beam.reproduction import rows as beam
+    from framework.structures.bridge.reproduction import rows as bridge
+    from framework.structures.lab_frame.reproduction import rows as lab_frame
+    from framework.structures.smu.reproduction import rows as smu
+
+    assert PROVIDERS == [lab_frame, bridge, beam, smu]
+
+
 def test_missing_tables_give_not_run_rows(tmp_path):
-    rows = reproduction.collect(tmp_path)
+    rows = reproduction.collect(tmp_path, PROVIDERS)
     assert rows and all(r["verdict"] == "not run" for r in rows if r["ours"].startswith("(no table"))
     assert any(r["ours"] == "(no table results/lab_frame_timing/timing.csv)" for r in rows)
 

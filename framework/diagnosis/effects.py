@@ -10,13 +10,14 @@ effects, and how to build the model with any set of active effects:
 
 whose ``parameters`` are the base parameters followed by the active effects' parameters.
 Parameters of inactive effects do not exist in that model (they keep their null value).
-Catalogues of the built-in structures are listed in :data:`CATALOGUES` by name
-("module:function" entries, imported on first use).
+A structure's catalogue lives in its package and reaches the diagnosis through its
+descriptor (``StructureDescriptor.effects``, looked up by
+:func:`framework.structures.registry.catalogue`); a model without hand-written effects gets
+:func:`catalogue_of_model` (generated candidates, :mod:`framework.diagnosis.auto`).
 """
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -127,41 +128,17 @@ class Catalogue:
         return np.arange(n)
 
 
-#: catalogue name -> "module:function(**options) -> Catalogue"
-CATALOGUES: dict[str, str] = {
-    "beam": "framework.structures.beam.effects:catalogue",
-    "lab_frame": "framework.structures.lab_frame.effects:catalogue",
-    "bridge": "framework.structures.bridge.effects:catalogue",
-}
-
-
-def get_catalogue(name: str, **options) -> Catalogue:
-    """The catalogue of structure ``name`` (a key of CATALOGUES or 'module:function')."""
-    path = CATALOGUES.get(name, name)
-    if ":" not in path:
-        raise InputError(f"structure {name!r} has no effect catalogue; known: {sorted(CATALOGUES)}")
-    if name in CATALOGUES:
-        module, attr = path.split(":", 1)
-        fn = getattr(importlib.import_module(module), attr)
-    else:  # user code: the registry's trust rules (a function defined in a user module)
-        from framework.structures.registry import resolve
-
-        fn = resolve(path, f"structure={name!r}")
-    try:
-        out = fn(**options)
-    except InputError:
-        raise
-    except TypeError as exc:
-        raise InputError(f"structure {name!r}: bad catalogue options {sorted(options)}: {exc}") from None
-    except Exception as exc:  # a user's build can raise anything: one line naming module and error
-        raise InputError(f"structure {name!r}: {path} failed: {type(exc).__name__}: {exc}") from None
+def as_catalogue(out, structure: str, source: str = "") -> Catalogue:
+    """What a structure's catalogue function returned, as a Catalogue: a Catalogue as is, an
+    OpenSees model as a catalogue without hand-written effects (``candidates: auto``)."""
     if isinstance(out, Catalogue):
         return out
     from framework.models.opensees import OpenSeesModel
 
     if isinstance(out, OpenSeesModel):  # a model without hand-written effects (candidates: auto)
-        return catalogue_of_model(out, structure=name)
-    raise InputError(f"structure {name!r}: {path} returned {type(out).__name__}, not a Catalogue or OpenSeesModel")
+        return catalogue_of_model(out, structure=structure)
+    raise InputError(f"structure {structure!r}: {source or structure} returned {type(out).__name__}, "
+                     "not a Catalogue or OpenSeesModel")
 
 
 def catalogue_of_model(model, structure: str = "user_model", n_measured_modes: int | None = None) -> Catalogue:

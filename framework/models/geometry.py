@@ -1,47 +1,47 @@
 """Geometry and full mode shapes of a model: nodes, elements, node displacements, sensor points.
 
-:func:`model_shapes(model, theta, structure)` returns a :class:`ModelShapes`: the model's
-modes at ``theta`` (``model.modal``, the modes the objective sees) with, for each, the
+:func:`model_shapes(model, theta, structure, geometry)` returns a :class:`ModelShapes`: the
+model's modes at ``theta`` (``model.modal``, the modes the objective sees) with, for each, the
 displacement (u_x, u_y, u_z) of every node, and the sensor points at which measured shapes
-are drawn. How a model's geometry is found:
+are drawn. Nothing here knows a structure: the geometry comes, in this order, from
 
-- an :class:`~framework.models.opensees.OpenSeesModel` (any user's model, the detailed lab
-  frame, the beam) or a model wrapping one as ``.plain`` (the bridge's fast path): the model
-  is built in the OpenSees domain and read back (``getNodeTags``, ``nodeCoord``,
-  ``getEleTags``, ``eleNodes``); the eigenproblem of the built domain is solved with the
-  framework's scipy solver and each mode of ``model.modal(theta)`` is matched to the domain
-  mode of nearest frequency, signed and scaled to agree at the measured DOFs. Element groups
-  come from what the build function returned: keys or attributes named ``<group>_elements``
-  and ``<group>_nodes`` (the bridge's ``deck_nodes``, ``pylon_nodes``, ``cable_elements``);
-- the beam's numpy model: its OpenSees twin (same matrices);
-- the 3-DOF lab frame: the rigid slab (0.65 m square) on four 0.7 m columns, the slab moved
-  by (x, y, theta), theta = torsion / (b/2);
-- a shear building (``floor1`` .. DOFs): floors stacked one storey apart;
-- anything else (e.g. the SMU footbridge, whose data hold no coordinates): no geometry,
-  the shapes are shown channel by channel.
+1. the ``geometry`` hook given by the caller (a structure descriptor's, e.g. the detailed lab
+   frame's: its domain with sensor points at the slab corners);
+2. the model's own method ``geometry(theta, shapes)`` (e.g. the 3-DOF lab frame draws a
+   rigid slab, a shear building stacked floors, the beam's numpy model and the bridge's fast
+   path return their OpenSees twin);
+3. an :class:`~framework.models.opensees.OpenSeesModel` (any user's model): its built domain;
+4. else none: the shapes are shown channel by channel (e.g. the SMU footbridge, whose data
+   hold no coordinates).
 
-Measured DOFs become sensor points: a translational DOF at its node with its direction; the
-lab frame's (y, x, torsion) move the four slab corners rigidly. A measured shape s (at the
-DOFs) moves point p by sum_d T[p, :, d] s_d.
+A hook ``geometry(model, theta, shapes)`` or method ``geometry(theta, shapes)`` gets the
+:class:`ModelShapes` of the modes (no geometry yet) and returns it with the geometry filled
+in, or an OpenSeesModel to read from its built domain (:func:`domain_shapes`), or None.
+
+The built domain (:func:`domain_shapes`): the model is built in the OpenSees domain and read
+back (``getNodeTags``, ``nodeCoord``, ``getEleTags``, ``eleNodes``); the eigenproblem of the
+built domain is solved with the framework's scipy solver and each mode of
+``model.modal(theta)`` is matched to the domain mode of nearest frequency, signed and scaled
+to agree at the measured DOFs. Element groups come from what the build function returned:
+keys or attributes named ``<group>_elements`` and ``<group>_nodes`` (the bridge's
+``deck_nodes``, ``pylon_nodes``, ``cable_elements``). Its measured translational DOFs become
+sensor points at their nodes with their directions. A measured shape s (at the DOFs) moves
+point p by sum_d T[p, :, d] s_d.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from framework.models.base import full_theta
 
 log = logging.getLogger(__name__)
-
-#: lab frame: slab width and column length (SPEC 5, the detailed model's drawings), m
-SLAB_WIDTH_M = 0.65
-STOREY_HEIGHT_M = 0.7
-LAB_FRAME_DOFS = ("y", "x", "torsion")
 
 
 @dataclass
@@ -74,7 +74,12 @@ class ModelShapes:
         return self.coords is not None
 
 
-def model_shapes(model, theta: Mapping[str, float], structure: str = "") -> ModelShapes:
+#: ``geometry(model, theta, shapes) -> ModelShapes | OpenSeesModel | None`` (module docstring)
+GeometryHook = Callable[[Any, Mapping[str, float], ModelShapes], Any]
+
+
+def model_shapes(model, theta: Mapping[str, float], structure: str = "", geometry: GeometryHook | None = None
+                 ) -> ModelShapes:
     """The modes of ``model`` at ``theta`` with geometry where it can be found (module docstring)."""
     from framework.models.opensees import OpenSeesModel
 
@@ -82,44 +87,28 @@ def model_shapes(model, theta: Mapping[str, float], structure: str = "") -> Mode
     types = result.mode_info.get("mode_type") if result.mode_info else None
     base = ModelShapes(result.frequencies_hz, result.shapes, result.dofs,
                        None if types is None else np.asarray(types, dtype=object))
-    twin = _opensees_twin(model)
+    own = getattr(model, "geometry", None)
     try:
-        if isinstance(model, OpenSeesModel) or twin is not None:
-            shapes = _opensees_geometry(twin or model, theta, base)
-        elif tuple(result.dofs) == LAB_FRAME_DOFS:
-            shapes = _lab_frame_geometry(base)
-        elif result.dofs and all(d.startswith("floor") and d[5:].isdigit() for d in result.dofs) \
-                and "eigenvectors" in result.meta:
-            shapes = _shear_building_geometry(base, np.asarray(result.meta["eigenvectors"], float), result)
+        if geometry is not None:
+            source = geometry(model, theta, base)
+        elif callable(own):
+            source = own(theta, base)
         else:
-            return base
+            source = model
+        if isinstance(source, OpenSeesModel):
+            return domain_shapes(source, theta, base)
+        if isinstance(source, ModelShapes) and source.has_geometry:
+            return source
     except Exception as exc:  # a drawing aid must not lose the study: fall back to channels
         log.warning("geometry of %s not available (%s: %s); shapes shown by channel", structure or model,
                     type(exc).__name__, exc)
-        return base
-    if tuple(result.dofs) == LAB_FRAME_DOFS and shapes.coords is not None:
-        _rigid_slab_points(shapes, float(np.max(shapes.coords[:, 2])))
-    return shapes
-
-
-def _opensees_twin(model):
-    """The OpenSeesModel behind a model that wraps one (bridge fast path, beam numpy model)."""
-    from framework.models.opensees import OpenSeesModel
-
-    plain = getattr(model, "plain", None)
-    if isinstance(plain, OpenSeesModel):
-        return plain
-    if type(model).__name__ == "BeamNumpyModel":
-        from framework.structures.beam.model import make_opensees_model
-
-        p = model.parameters
-        return make_opensees_model(len(p), int(getattr(model, "n_modes", 7)), float(p.lower[0]), float(p.upper[0]))
-    return None
+    return ModelShapes(result.frequencies_hz, result.shapes, result.dofs, base.mode_types)
 
 
 # ---- OpenSees domain -----------------------------------------------------------------------
-def _opensees_geometry(model, theta: Mapping[str, float], base: ModelShapes) -> ModelShapes:
-    """Build ``model`` at theta, solve the built domain and read nodes, elements and node shapes."""
+def domain_shapes(model, theta: Mapping[str, float], base: ModelShapes) -> ModelShapes:
+    """``base`` with the geometry of the OpenSeesModel ``model`` built at theta: nodes, elements,
+    node shapes of the built domain's modes matched to ``base``'s, sensor points (module docstring)."""
     from framework.models.eigen_solve import lowest_modes
     from framework.models.opensees import ops_module, run_static
     from framework.models.opensees_matrices import DofMap, stiffness_and_mass
@@ -237,59 +226,3 @@ def _group_of(nodes: tuple[int, ...], node_groups: dict[int, str]) -> str:
     if len(groups) == 1:
         return groups.pop()
     return "structure" if not groups else "connection"
-
-
-# ---- built-in models without a domain -----------------------------------------------------
-def _corners(z: float) -> np.ndarray:
-    h = SLAB_WIDTH_M / 2
-    return np.array([[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]])
-
-
-def _rigid_slab_points(shapes: ModelShapes, z: float) -> None:
-    """Sensor points of the lab frame's (y, x, torsion) DOFs: the slab corners, moved rigidly
-    by u_x = x - theta y_c, u_y = y + theta x_c with theta = torsion / (b/2)."""
-    corners = _corners(z)
-    index = {d: i for i, d in enumerate(shapes.dofs)}
-    T = np.zeros((4, 3, len(shapes.dofs)))
-    half = SLAB_WIDTH_M / 2
-    for p, (xc, yc, _) in enumerate(corners):
-        T[p, 0, index["x"]] = 1.0
-        T[p, 1, index["y"]] = 1.0
-        T[p, 0, index["torsion"]] = -yc / half
-        T[p, 1, index["torsion"]] = xc / half
-    shapes.points = ["corner SW", "corner SE", "corner NE", "corner NW"]
-    shapes.point_coords, shapes.T = corners, T
-
-
-def _lab_frame_geometry(base: ModelShapes) -> ModelShapes:
-    """Rigid slab at 0.7 m on four columns; node shapes from the slab's rigid motion."""
-    _rigid_slab_points(base, STOREY_HEIGHT_M)
-    top, ground = _corners(STOREY_HEIGHT_M), _corners(0.0)
-    base.node_tags = np.arange(1, 9)
-    base.coords = np.vstack([ground, top])
-    slab = np.einsum("pcd,dm->pcm", base.T, base.dof_shapes)
-    base.node_shapes = np.concatenate([np.zeros_like(slab), slab], axis=0)
-    base.elements = [(i + 1, (i + 1, i + 5), "column") for i in range(4)]
-    base.elements += [(5 + i, (5 + i, 5 + (i + 1) % 4), "slab") for i in range(4)]
-    base.node_groups = {i: ("ground" if i <= 4 else "slab") for i in range(1, 9)}
-    return base
-
-
-def _shear_building_geometry(base: ModelShapes, phi_full: np.ndarray, result) -> ModelShapes:
-    """Floors stacked one storey apart (z in storeys), moving in x; the ground at z = 0."""
-    n = phi_full.shape[0]
-    base.length_unit = "storey"
-    base.node_tags = np.arange(0, n + 1)
-    base.coords = np.zeros((n + 1, 3))
-    base.coords[:, 2] = np.arange(n + 1)
-    U = np.zeros((n + 1, 3, phi_full.shape[1]))
-    U[1:, 0, :] = phi_full
-    base.node_shapes = U[:, :, : base.frequencies_hz.size]
-    base.elements = [(i, (i - 1, i), "storey") for i in range(1, n + 1)]
-    floors = [int(d[5:]) for d in base.dofs]
-    base.points = [f"floor {f}" for f in floors]
-    base.point_coords = base.coords[floors]
-    base.T = np.zeros((len(floors), 3, len(floors)))
-    for p in range(len(floors)):
-        base.T[p, 0, p] = 1.0
-    return base

@@ -10,17 +10,44 @@ Any consistent unit system works (the four-storey benchmark uses lbf, in, s: mas
 lbf s^2/in, stiffnesses in lbf/in). Built on :class:`framework.models.matrix.MatrixModel`
 with one updating parameter ``alpha_i`` per storey, DOFs labelled ``floor1`` .. ``floorN``;
 exact modal derivatives (dK/dalpha_i = k_i,0 E_i) come with it (``modal_derivatives``).
+Its modes are drawn as floors stacked one storey apart (:meth:`ShearBuilding.geometry`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from framework.core.errors import InputError
 from framework.core.parameters import Parameter, ParameterSet
+from framework.models.geometry import ModelShapes
 from framework.models.matrix import MatrixModel
+
+
+class ShearBuilding(MatrixModel):
+    """A :class:`MatrixModel` whose DOFs are the floors' lateral displacements, floor i = DOF i - 1."""
+
+    def geometry(self, theta: Mapping[str, float], shapes: ModelShapes) -> ModelShapes:
+        """Floors stacked one storey apart (z in storeys), moving in x; the ground at z = 0;
+        sensor points at the measured floors."""
+        phi = np.asarray(self.modal(theta).meta["eigenvectors"], float)
+        n = phi.shape[0]
+        shapes.length_unit = "storey"
+        shapes.node_tags = np.arange(0, n + 1)
+        shapes.coords = np.zeros((n + 1, 3))
+        shapes.coords[:, 2] = np.arange(n + 1)
+        U = np.zeros((n + 1, 3, phi.shape[1]))
+        U[1:, 0, :] = phi
+        shapes.node_shapes = U[:, :, : shapes.frequencies_hz.size]
+        shapes.elements = [(i, (i - 1, i), "storey") for i in range(1, n + 1)]
+        floors = [int(self.dof_index[self.dofs.index(d)]) + 1 for d in shapes.dofs]
+        shapes.points = [f"floor {f}" for f in floors]
+        shapes.point_coords = shapes.coords[floors]
+        shapes.T = np.zeros((len(floors), 3, len(floors)))
+        for p in range(len(floors)):
+            shapes.T[p, 0, p] = 1.0
+        return shapes
 
 
 def storey_matrices(n_floors: int) -> list[np.ndarray]:
@@ -43,8 +70,8 @@ def make_shear_building(
     alpha_bounds: tuple[float, float] = (-1.0, 1.0),
     n_modes: int | None = None,
     name: str = "shear_building",
-) -> MatrixModel:
-    """Shear-building MatrixModel; measured_floors are 1-based (default: all floors)."""
+) -> ShearBuilding:
+    """Shear-building model; measured_floors are 1-based (default: all floors)."""
     m = np.asarray(masses, dtype=float)
     k = np.asarray(stiffnesses, dtype=float)
     if m.ndim != 1 or m.size == 0 or k.shape != m.shape:
@@ -65,7 +92,7 @@ def make_shear_building(
         Parameter(f"alpha_{i + 1}", 0.0, lo, hi, "-", f"relative change of storey {i + 1} stiffness") for i in range(n)
     )
     parts = [ki * E for ki, E in zip(k, storey_matrices(n))]
-    return MatrixModel(
+    return ShearBuilding(
         parts,
         np.diag(m),
         params,

@@ -11,25 +11,21 @@ with one table row per item:
 - ``verdict``: where the SPEC states an expectation, whether ours meets it.
 
 Where our method deliberately differs (a variant labelled "(ours)"), both are in the row or
-in two rows. The rows come from provider modules, each exposing
-``rows(results_dir) -> list[dict]``; a provider whose tables are missing returns a row that
-says so (the report never fails on a missing table).
+in two rows. The rows come from providers ``rows(results_dir) -> list[dict]``, passed in by
+the caller (``gomu report --reproduction`` passes those of the registered structures, each
+from its descriptor, :func:`framework.structures.registry.reproduction_providers`); a
+provider whose tables are missing returns a row that says so (the report never fails on a
+missing table).
 """
 
 from __future__ import annotations
 
-import importlib
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 COLUMNS = ("study", "item", "source", "ours", "choice", "verdict")
 
-#: Provider modules, in report order.
-PROVIDERS: tuple[str, ...] = (
-    "framework.structures.lab_frame.reproduction",
-    "framework.structures.bridge.reproduction",
-    "framework.structures.beam.reproduction",
-    "framework.structures.smu.reproduction",
-)
+Provider = Callable[[Path], list[dict]]
 
 HEADER = """# Reproduction of the source study
 
@@ -41,14 +37,14 @@ Labels ending in "(ours)" are our variants, not the source's method.
 """
 
 
-def collect(results_dir: Path | str, providers: tuple[str, ...] = PROVIDERS) -> list[dict]:
+def collect(results_dir: Path | str, providers: Sequence[Provider]) -> list[dict]:
     """Rows of every provider, in order, each with exactly the report's columns."""
     rows: list[dict] = []
-    for name in providers:
-        module = importlib.import_module(name)
-        for row in module.rows(Path(results_dir)):
+    for provider in providers:
+        for row in provider(Path(results_dir)):
             unknown = sorted(set(row) - set(COLUMNS))
             if unknown:
+                name = f"{getattr(provider, '__module__', '')}.{getattr(provider, '__name__', provider)}"
                 raise ValueError(f"{name}: unknown report columns {unknown}")
             rows.append({c: str(row.get(c, "") or "") for c in COLUMNS})
     return rows
@@ -75,11 +71,11 @@ def render(rows: list[dict]) -> str:
     return "\n".join(out) + "\n"
 
 
-def write(results_dir: Path | str, output: Path | str) -> Path:
-    """Render the report from ``results_dir`` into ``output``."""
+def write(results_dir: Path | str, output: Path | str, providers: Sequence[Provider]) -> Path:
+    """Render the report of ``providers`` from ``results_dir`` into ``output``."""
     path = Path(output)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(render(collect(results_dir)), encoding="utf-8")
+    path.write_text(render(collect(results_dir, providers)), encoding="utf-8")
     return path
 
 

@@ -28,19 +28,21 @@ import numpy as np
 import pandas as pd
 
 from framework.core.correlation import comac, mac_matrix
-from framework.models.geometry import ModelShapes, model_shapes
+from framework.models.geometry import GeometryHook, ModelShapes, model_shapes
 
 TABLES = ("geometry", "mode_shapes", "sensor_shapes", "mac_matrix", "comac")
 
 
-def shape_tables(problem, states: dict[str, np.ndarray], structure: str = "") -> dict[str, pd.DataFrame]:
-    """The five tables (module docstring) of ``problem`` at each named point theta (physical)."""
+def shape_tables(problem, states: dict[str, np.ndarray], structure: str = "",
+                 geometry: GeometryHook | None = None) -> dict[str, pd.DataFrame]:
+    """The five tables (module docstring) of ``problem`` at each named point theta (physical);
+    ``geometry``: the structure's geometry hook, if it has one (:mod:`framework.models.geometry`)."""
     out: dict[str, list] = {t: [] for t in TABLES}
     measured = problem.measured
     geometry_done = False
     for state, theta in states.items():
         theta = np.asarray(theta, float)
-        shapes = model_shapes(problem.model, problem.parameters.as_dict(theta), structure)
+        shapes = model_shapes(problem.model, problem.parameters.as_dict(theta), structure, geometry)
         corr = problem.correlation_at(theta)
         if not geometry_done and shapes.has_geometry:
             out["geometry"] = geometry_rows(shapes)

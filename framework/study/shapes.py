@@ -9,8 +9,11 @@ measured data; a study comparing structures gets them for the best run of each (
 ``model``: the structure's name). An ``analysis`` study gets them at each of its points (the
 variant with the most successful points, per structure); both through :func:`shape_states`.
 A ``damage`` study (the beam) gets them per damaged state for its best estimate (its own
-hook). Other kinds have no hook and get none. The figures are drawn from the written tables
-only (:mod:`framework.report.figures`), so ``gomu report`` needs no model.
+hook). Other kinds have no hook and get none. The model's geometry comes from the structure's
+descriptor (its ``geometry`` hook, else the model's own ``geometry`` method or its OpenSees
+domain, :mod:`framework.models.geometry`): a user's ``module:function`` model takes the same
+path as a built-in. The figures are drawn from the written tables only
+(:mod:`framework.report.figures`), so ``gomu report`` needs no model.
 
 A failure here (a model that cannot be built, say) is logged and leaves the study's tables
 untouched.
@@ -84,11 +87,13 @@ def write_shape_tables(out: Path, tables: dict[str, pd.DataFrame], cfg, kind, sp
     hook; returns the files (none for a kind without the hook, none on failure)."""
     if kind.shapes is None:
         return []
+    from framework.study.structure_hooks import geometry_of
+
     try:
         parts: dict[str, list[pd.DataFrame]] = {name: [] for name in TABLES}
         found = kind.shapes(cfg, tables, specs)
         for model, problem, states in found:
-            shapes = shape_tables(problem, states, structure=model)
+            shapes = shape_tables(problem, states, structure=model, geometry=geometry_of(model))
             for name in TABLES:
                 parts[name].append(shapes[name].assign(model=model) if not shapes[name].empty else shapes[name])
         if not parts["mac_matrix"]:

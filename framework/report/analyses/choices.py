@@ -9,16 +9,18 @@ Asked for in the config's ``report``::
           - {item: SM method, value: pseudo-inverse iteration, origin: source-given, reason: SPEC 4}
 
 Table ``choices``: study, item, value, origin ("source-given" or "our assumption"), reason.
-A built-in structure documents its choices with ``modelling_choices(**options)`` in its
-package (e.g. :func:`framework.structures.bridge.modelling_choices`); the options are
-``structure.options`` if given, else read from the study's tables for ``variant`` (the
-``analysis`` kind writes every scalar structure option as a column), else the defaults.
+A structure documents its choices with ``modelling_choices(**options)`` in its descriptor
+(e.g. the bridge's, :func:`framework.structures.bridge.choices.modelling_choices`); the study
+layer passes that function in as ``modelling_choices`` (this module imports no structure).
+The options are ``structure.options`` if given, else read from the study's tables for
+``variant`` (the ``analysis`` kind writes every scalar structure option as a column), else
+the defaults.
 """
 
 from __future__ import annotations
 
-import importlib
 import inspect
+from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
@@ -27,19 +29,6 @@ from framework.core.errors import InputError
 
 COLUMNS = ("study", "item", "value", "origin", "reason")
 ORIGINS = ("source-given", "our assumption")
-
-
-def structure_choices(name: str, options: dict) -> list[dict]:
-    """Rows of a built-in structure's ``modelling_choices(**options)``."""
-    from framework.structures.registry import STRUCTURES
-
-    if name not in STRUCTURES:
-        raise InputError(f"report.choices.structure.name: {name!r} is not a built-in structure")
-    module = importlib.import_module(STRUCTURES[name].split(":")[0])
-    function = getattr(module, "modelling_choices", None)
-    if function is None:
-        raise InputError(f"report.choices.structure.name: structure {name!r} documents no modelling choices")
-    return function(**options)
 
 
 def _options_from_tables(tables: dict[str, pd.DataFrame], function, variant: str | None) -> dict:
@@ -66,18 +55,17 @@ def _options_from_tables(tables: dict[str, pd.DataFrame], function, variant: str
 
 
 def tables(tables: dict[str, pd.DataFrame], structure: dict | None = None, items: list | None = None,
-           **_) -> dict[str, pd.DataFrame]:
+           modelling_choices: Callable[..., list[dict]] | None = None, **_) -> dict[str, pd.DataFrame]:
+    """The ``choices`` table; ``modelling_choices``: the named structure's (given by the study layer)."""
     rows = []
     if structure:
-        from framework.structures.registry import STRUCTURES
-
         name = structure.get("name")
+        if modelling_choices is None:
+            raise InputError(f"report.choices.structure.name: structure {name!r} documents no modelling choices")
         options = structure.get("options")
         if options is None:
-            module = importlib.import_module(STRUCTURES[name].split(":")[0]) if name in STRUCTURES else None
-            function = getattr(module, "modelling_choices", None) if module else None
-            options = _options_from_tables(tables, function, structure.get("variant")) if function else {}
-        rows += structure_choices(name, options)
+            options = _options_from_tables(tables, modelling_choices, structure.get("variant"))
+        rows += modelling_choices(**options)
     for i, item in enumerate(items or []):
         missing = [k for k in COLUMNS[1:] if k not in item]
         if missing:

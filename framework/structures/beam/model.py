@@ -355,6 +355,11 @@ class BeamNumpyModel:
         dlam, dphi, n_fact = eigen_derivatives(K, M, lam[modes], phi, dK_phi)
         return ModalDerivatives(modes, tuple(names), dlam, dphi[self._rows()], n_fact + extra)
 
+    def geometry(self, theta: Mapping[str, float], shapes=None):
+        """How its modes are drawn: its OpenSees twin (the same beam, read from the built domain)."""
+        p = self.parameters
+        return make_opensees_model(self.n_elements, self.n_modes, float(p.lower[0]), float(p.upper[0]))
+
 
 # ---- registry entry points ----------------------------------------------------------------
 def make_model(

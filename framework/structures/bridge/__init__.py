@@ -2,7 +2,7 @@
 
 ``make_model(cable_elements=4, fast=True, ...)`` builds the model, ``measured(case)`` gives
 the measured modes; the structure is registered as ``bridge`` in
-:mod:`framework.structures.registry`. Model notes: docs/bridge.md.
+:mod:`framework.structures.registry` (its descriptor: :mod:`.descriptor`). Model notes: docs/bridge.md.
 
 Modules, one job each (imports only go down this list, no cycles):
 
@@ -16,7 +16,13 @@ Modules, one job each (imports only go down this list, no cycles):
 - :mod:`.fast`: the fast eigen path (OpenSees gravity, numpy/scipy eigen solution);
 - :mod:`.model`: :func:`make_model`, plain or fast path;
 - :mod:`.choices`: the model's modelling choices as table rows (:func:`modelling_choices`);
-- :mod:`.reference`: :func:`measured`, with reference shapes from the initial model.
+- :mod:`.reference`: :func:`measured`, with reference shapes from the initial model;
+- :mod:`.effects`: the effect catalogue of ``gomu diagnose``;
+- :mod:`.vibration_tests` and :mod:`.campaign`: the simulated shaker and jumping tests and the
+  modes identified from them;
+- :mod:`.reproduction`: the bridge's rows of docs/reproduction.md;
+- :mod:`.descriptor`: :data:`~.descriptor.BRIDGE`, every feature above for the registry
+  (nothing in the package imports it, nor this face).
 """
 
 from framework.structures.bridge.choices import modelling_choices

@@ -50,13 +50,13 @@ MODEL_OPTIONS = {"lateral_restraint": "guided", "deck_section": "slab_overhangs"
 @functools.lru_cache(maxsize=4)
 def bridge_model(cable_elements: int) -> StructuralModel:
     """The bridge model (fast path, :data:`MODEL_OPTIONS`), built once per cable discretisation and process."""
-    from framework.structures.bridge import make_model
+    from framework.structures.bridge.model import make_model
 
     return make_model(cable_elements=cable_elements, **MODEL_OPTIONS)
 
 
 def _base_parameters() -> ParameterSet:
-    from framework.structures.bridge import bridge_parameters
+    from framework.structures.bridge.parameters import bridge_parameters
 
     return bridge_parameters().subset(BASE_NAMES)
 
@@ -110,7 +110,7 @@ def make_model(active: Mapping[str, str]) -> BridgeWithEffects:
 
 def select_modes(result: ModalResult, n_modes: int) -> np.ndarray:
     """The SPEC's 8 measured modes in a truth model: by type and nearest frequency."""
-    from framework.structures.bridge import pair_by_type
+    from framework.structures.bridge.modes import pair_by_type
 
     idx = pair_by_type(result)
     if np.any(idx < 0):
@@ -122,7 +122,7 @@ def select_modes(result: ModalResult, n_modes: int) -> np.ndarray:
 
 def label_modes(result: ModalResult, idx: np.ndarray) -> tuple[str, ...]:
     """SPEC labels plus the truth mode's cable share of kinetic energy, e.g. '1st vertical [cable 0.86]'."""
-    from framework.structures.bridge import MEASURED_LABELS
+    from framework.structures.bridge.data import MEASURED_LABELS
 
     share = result.mode_info.get("cable_energy")
     if share is None:
@@ -132,7 +132,7 @@ def label_modes(result: ModalResult, idx: np.ndarray) -> tuple[str, ...]:
 
 def catalogue() -> Catalogue:
     """The bridge's catalogue (model under test: single-element cables, deck stiffness only)."""
-    from framework.structures.bridge import MEASURED_LABELS
+    from framework.structures.bridge.data import MEASURED_LABELS
 
     return Catalogue(
         structure="bridge",

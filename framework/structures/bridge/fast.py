@@ -522,6 +522,10 @@ class BridgeFastModel:
         state["_operators"] = None  # rebuilt lazily in the worker
         return state
 
+    def geometry(self, theta: Mapping[str, float], shapes=None) -> OpenSeesModel:
+        """How its modes are drawn: the plain model's built OpenSees domain (same build)."""
+        return self.plain
+
     @property
     def operators(self) -> _Operators:
         if self._operators is None:

@@ -56,23 +56,24 @@ MODEL_OPTIONS = {"lateral_restraint": "guided", "deck_section": "slab_overhangs"
 
 @functools.lru_cache(maxsize=4)
 def _true_result(theta_items: tuple) -> object:
-    from framework.structures import bridge
+    from framework.structures.bridge.model import make_model
 
-    return bridge.make_model(fast=False, **MODEL_OPTIONS).modal(dict(theta_items))
+    return make_model(fast=False, **MODEL_OPTIONS).modal(dict(theta_items))
 
 
 def true_modes(theta: Mapping[str, float] | None = None) -> dict:
     """Deck modes of the true bridge: f_hz, zeta, shapes (36, m), dofs, mode_type, labels."""
-    from framework.structures import bridge
+    from framework.structures.bridge.data import MEASURED_DAMPING, MEASURED_LABELS
+    from framework.structures.bridge.modes import pair_by_type
 
     res = _true_result(tuple(sorted((theta or {}).items())))
     m = res.frequencies_hz.size
     zeta = np.full(m, OTHER_DAMPING)
     labels = [f"{t} ({f:.2f} Hz)" for t, f in zip(res.mode_info["mode_type"], res.frequencies_hz)]
-    paired = bridge.pair_by_type(res)
+    paired = pair_by_type(res)
     for j, k in enumerate(paired):
-        zeta[k] = bridge.MEASURED_DAMPING[j]
-        labels[k] = bridge.MEASURED_LABELS[j]
+        zeta[k] = MEASURED_DAMPING[j]
+        labels[k] = MEASURED_LABELS[j]
     return {
         "f_hz": np.asarray(res.frequencies_hz),
         "zeta": zeta,

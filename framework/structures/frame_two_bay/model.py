@@ -9,17 +9,11 @@ the beams (roof 1.0 t/m) lumped at the nodes (tributary lengths), horizontal and
 
 Parameters (the model under test): ``column_stiffness_ratio`` and ``beam_stiffness_ratio``
 (E multipliers, 0.7-1.3). Measured: the six lowest modes at the left node of each floor
-(x) and the beams' mid-span nodes (y).
-
-:func:`catalogue` is the structure's effect catalogue for the diagnosis: one hand-written
-effect, ``two_storey_brace`` (a diagonal from the base of line A to level 2 of line B; no
-generated candidate spans two storeys, so it is the study's out-of-candidate case), plus
-the candidates generated from the model (:func:`framework.diagnosis.auto.with_auto`).
+(x) and the beams' mid-span nodes (y). Its effect catalogue is :mod:`.effects`.
 """
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Mapping
 
 from framework.core.parameters import Parameter, ParameterSet
@@ -120,41 +114,3 @@ def model(brace: bool = False) -> OpenSeesModel:
 
 def _build_braced(values: Mapping[str, float]) -> dict:
     return build(values, brace=float(values["two_storey_brace_area"]))
-
-
-def _factory(active, **_):
-    return model(brace="two_storey_brace" in active)
-
-
-#: hidden (variants, value range) of the generated candidates in the diagnosis study's data
-HIDDEN = {
-    "member_stiffness_change": (("ele1", "ele2", "ele3", "ele4", "ele5", "ele6"), (-0.6, -0.4)),
-    "added_brace": (None, (1.0, 2.0)),
-    "level_mass_change": (None, (0.25, 0.4)),
-    "semi_rigid_connections": (("all",), (0.5, 1.0)),
-    "support_rotational_flexibility": (("all",), (0.5, 1.0)),
-}
-
-
-@functools.lru_cache(maxsize=2)
-def catalogue(candidates: str = "auto"):
-    """The frame's catalogue: hand-written ``two_storey_brace`` + generated candidates."""
-    from framework.diagnosis.auto import with_auto
-    from framework.diagnosis.effects import Catalogue, Effect
-
-    hand = Catalogue(
-        structure="frame_two_bay",
-        base_parameters=PARAMETERS,
-        effects={
-            "two_storey_brace": Effect(
-                "two_storey_brace",
-                "a diagonal from the base of line A to level 2 of line B (spans two storeys)",
-                (Parameter("two_storey_brace_area", 0.0, 0.0, 5.0, "-", "area / 10 cm^2"),),
-                hidden_values={"two_storey_brace_area": (1.0, 2.0)},
-            )
-        },
-        factory=_factory,
-        n_measured_modes=6,
-        description="three-storey two-bay OpenSees frame; 6 modes at 9 DOFs",
-    )
-    return with_auto(hand, HIDDEN)

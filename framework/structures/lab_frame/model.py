@@ -52,8 +52,9 @@ from framework.core.parameters import Parameter, ParameterSet
 from framework.measured.modes import MeasuredModes
 from framework.models.arrays import ModalArrays, theta_matrix
 from framework.models.base import ModalResult, full_theta
+from framework.models.geometry import ModelShapes
+from framework.structures.lab_frame.geometry import SLAB_WIDTH_M, slab_on_columns
 
-SLAB_WIDTH_M = 0.65
 DOFS = ("y", "x", "torsion")
 
 #: Fixed mass properties of the frame (SPEC 5).
@@ -221,6 +222,12 @@ class ThreeDofFrame:
         bad = np.flatnonzero(np.any(w2 <= 0, axis=1))
         errors = {int(i): ModelEvaluationError("indefinite_matrix", f"eigenvalues {w2[i].tolist()}") for i in bad}
         return ModalArrays(np.sqrt(np.maximum(w2, 0.0)) / (2 * math.pi), phi, DOFS, errors)
+
+    def geometry(self, theta: Mapping[str, float], shapes: ModelShapes) -> ModelShapes:
+        """How its modes are drawn: the rigid slab on four columns, sensors at the slab corners
+        (:mod:`framework.structures.lab_frame.geometry`)."""
+        return slab_on_columns(shapes)
+
 
 def make_model(added_mass_kg: float = 0.0, case: str | None = None, congruence: str = DEFAULT_CONGRUENCE,
                added_block: str = "cylinder") -> ThreeDofFrame:

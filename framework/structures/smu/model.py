@@ -2,13 +2,15 @@
 
 The data files are *read* from ``<project>/../shared/benchmarks/smu/`` (or the folder in
 the environment variable ``GOMU_SMU_DIR``); they are never copied into the project.
-See that folder's README.md for their content. Structures and measured data, for configs:
+See that folder's README.md for their content. Structures and measured data, registered as
+``four_story`` and ``footbridge`` (:mod:`.descriptor`; ``structure: {name: four_story}``,
+``measured: {builtin: four_story, case: ...}`` in a config):
 
-- ``framework.structures.smu.model:make_four_story`` / ``four_story_measured`` (cases "base": floors
+- :func:`make_four_story` / :func:`four_story_measured` (cases "base": floors
   1-3 and modes 1-2 as in the reference; "all_floors": floors 1-4, modes 1-2; "all":
   floors 1-4, modes 1-4). Units lbf, in, s: floor mass 12.060 lb / 386.088 in/s^2,
   nominal storey stiffness 10 lbf/in, k_i = 10 (1 + alpha_i), alpha_i in [-1, 1].
-- ``framework.structures.smu.model:make_footbridge`` / ``footbridge_measured``: 946-DOF model
+- :func:`make_footbridge` / :func:`footbridge_measured`: 946-DOF model
   K = sum_j (1 + alpha_j) K_j over 17 substructures, singular M0, 58 measured DOFs
   (labels ``dof<n>``, n the 1-based DOF number of the source), 5 measured modes with
   eigenvalue and shape standard deviations.
@@ -31,7 +33,7 @@ from framework.core.errors import InputError
 from framework.core.parameters import Parameter, ParameterSet
 from framework.measured.modes import MeasuredModes
 from framework.models.matrix import MatrixModel, load_matrices
-from framework.models.shear_building import make_shear_building
+from framework.models.shear_building import ShearBuilding, make_shear_building
 
 ENV_VAR = "GOMU_SMU_DIR"
 FOUR_STORY_FILE = "four_story_modes.mat"
@@ -103,7 +105,7 @@ def _case(case: str, cases: dict, what: str):
     return cases[case]
 
 
-def make_four_story(measured_floors=(1, 2, 3, 4), n_modes: int = 4) -> MatrixModel:
+def make_four_story(measured_floors=(1, 2, 3, 4), n_modes: int = 4) -> ShearBuilding:
     """Four-storey shear frame: 4 floors of 12.060 lb, storeys 10 (1 + alpha_i) lbf/in."""
     return make_shear_building(
         [FLOOR_MASS] * 4,

@@ -359,8 +359,9 @@ def _data_columns(measured) -> dict[str, list]:
 # ---- analyses and figures ----------------------------------------------------------------
 def analyses(tables: dict, report: dict) -> dict:
     from framework.report.analyses import run_analyses
+    from framework.study.structure_hooks import with_structure_choices
 
-    return run_analyses(tables, report)
+    return run_analyses(tables, with_structure_choices(report))
 
 
 def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:

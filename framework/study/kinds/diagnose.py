@@ -7,7 +7,7 @@ Example (one diagnosis; ``gomu diagnose`` or ``gomu run``)::
 
     study: lab_two_effects
     kind: diagnose
-    structure: lab_frame              # a catalogue: beam, lab_frame, bridge, or module:function
+    structure: lab_frame              # a catalogue: beam, lab_frame, bridge, frame_two_bay, or module:function
     measured:                         # exactly one of file / builtin / generate
       generate: {hidden: {semi_rigid_joints: null, sensor_mass_eccentricity: null}, noise: high}
     seed: 2                           # the data's seed when generate gives none
@@ -56,10 +56,11 @@ from pydantic import (
 from framework.core.errors import InputError, ModelEvaluationError
 from framework.core.status import Status
 from framework.diagnosis.auto import with_candidates
-from framework.diagnosis.effects import Catalogue, get_catalogue
+from framework.diagnosis.effects import Catalogue
 from framework.diagnosis.score import NO_CHANGE
 from framework.diagnosis.tables import TABLES, diagnosis_rows
 from framework.diagnosis.workflow import DiagnoseSettings, diagnose
+from framework.structures import registry
 from framework.structures.registry import check_reference
 from framework.study.kinds.base import Kind, failure, task_key
 from framework.study.kinds.diagnose_measured import MeasuredSource, data_seed, measured_of, noise_of, source_kind
@@ -115,12 +116,10 @@ class Config(StudyHeader):
         """A built-in catalogue, or ``module:function`` of a user module (returning a
         ``Catalogue`` or an ``OpenSeesModel``): checked by form here, imported only when the
         study runs or ``gomu validate --build`` asks (the trust model in the README)."""
-        from framework.diagnosis.effects import CATALOGUES
-
-        if v in CATALOGUES:
+        if v in registry.CATALOGUES:
             return v
         if ":" not in v:
-            raise ValueError(f"structure {v!r} has no effect catalogue; known: {sorted(CATALOGUES)} "
+            raise ValueError(f"structure {v!r} has no effect catalogue; known: {sorted(registry.CATALOGUES)} "
                              "or 'module:function' of your own model")
         try:
             check_reference(v, "structure")
@@ -160,7 +159,7 @@ def check(cfg: Config, source: str, base_dir: Path | None = None) -> None:
 # ---- plan --------------------------------------------------------------------------------
 @functools.lru_cache(maxsize=16)
 def _catalogue(structure: str, options_json: str, candidates_json: str) -> Catalogue:
-    return with_candidates(get_catalogue(structure, **json.loads(options_json)), json.loads(candidates_json))
+    return with_candidates(registry.catalogue(structure, **json.loads(options_json)), json.loads(candidates_json))
 
 
 def catalogue_of(task: dict) -> Catalogue:

@@ -109,7 +109,8 @@ class PeakPickingConfig(Strict):
 
 
 class SimulatedTestConfig(Strict):
-    structure: Literal["lab_frame", "bridge"]
+    #: a structure with simulated tests (its descriptor's ``tests``): lab_frame, bridge
+    structure: str
     test: str
     methods: list[Literal["n4sid", "ssi_cov", "peak_picking"]] = Field(min_length=1)
     #: seed of the first record (default: the study's seed)
@@ -129,10 +130,11 @@ class SimulatedTestConfig(Strict):
 
     @model_validator(mode="after")
     def _consistent(self):
-        from framework.identification import campaign
+        from framework.structures.registry import campaign
 
         try:
-            tt = campaign.simulated_test(self.structure, self.test)
+            tests = campaign(self.structure)
+            tt = tests.test(self.test)
         except InputError as exc:
             raise ValueError(str(exc)) from None
         if len(set(self.methods)) != len(self.methods):
@@ -148,9 +150,9 @@ class SimulatedTestConfig(Strict):
                 raise ValueError(f"f_range_hz: test {self.test!r} is not a sweep")
             if self.f_range_hz[1] >= self.sampling_hz / 2:
                 raise ValueError(f"f_range_hz: {self.f_range_hz} reaches the Nyquist frequency {self.sampling_hz / 2}")
-        if self.component is not None and self.component not in campaign.COMPONENTS[self.structure]:
+        if self.component is not None and self.component not in tests.components:
             raise ValueError(f"component: {self.component!r} is not one of "
-                             f"{list(campaign.COMPONENTS[self.structure])} for {self.structure}")
+                             f"{list(tests.components)} for {self.structure}")
         # defaults of the test type, written out so that they are columns and part of the task
         if self.duration_s is None:
             self.duration_s = tt.duration_s
@@ -261,11 +263,11 @@ def setting_columns(task: dict) -> dict[str, Any]:
 
 def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
     """One run per test, method and repetition; the task holds everything the run needs."""
-    from framework.identification import campaign
+    from framework.structures.registry import campaign
 
     parts = []
     for label, test in cfg.tests.items():
-        tt = campaign.simulated_test(test.structure, test.test)
+        tt = campaign(test.structure).test(test.test)
         first = cfg.seed if test.seed is None else test.seed
         for method in test.methods:
             other = "subspace" if method == "peak_picking" else "peak_picking"
@@ -287,13 +289,13 @@ def plan_runs(cfg: Config, sweep_values: dict[str, Any]) -> list[dict]:
 
 def preflight(spec: dict, build_references: bool = True) -> None:
     """Channels named in ``peak_picking.frf_channels`` exist (InputError before any run)."""
-    from framework.identification import campaign
+    from framework.structures.registry import campaign
 
     task = spec["task"]
     names = task["settings"].get("frf_channels")
     if not isinstance(names, list):
         return
-    known = campaign.channels(task["structure"], task["component"])
+    known = campaign(task["structure"]).channels(task["component"])
     unknown = [c for c in names if c not in known]
     if unknown:
         raise InputError(f"tests.{spec['label']}.peak_picking.frf_channels: {unknown} are not channels of "
@@ -308,19 +310,19 @@ def channels_key(spec: dict) -> str:
 # ---- one run -----------------------------------------------------------------------------
 def run(spec: dict) -> dict[str, list[dict]]:
     """Simulate the records of one test, identify them with one method, compare with the truth."""
-    from framework.identification import campaign
+    from framework.structures.registry import campaign
 
     task = spec["task"]
     tables: dict[str, list[dict]] = {t: [] for t in TABLES}
     t0 = time.perf_counter()
-    tt = campaign.simulated_test(task["structure"], task["test"])
+    tests = campaign(task["structure"])
+    tt = tests.test(task["test"])
     summary = {"status": Status.OK, "error": "", "n_records": len(task["record_seeds"])}
     try:
-        records = [campaign.simulate(task["structure"], task["test"], seed, task["duration_s"], task["sampling_hz"],
-                                     task["output_noise"], task["input_noise"], task["f_range_hz"], task["component"])
+        records = [tests.simulate(task["test"], seed, task["duration_s"], task["sampling_hz"], task["output_noise"],
+                                  task["input_noise"], task["f_range_hz"], task["component"])
                    for seed in task["record_seeds"]]
-        truth = campaign.true_modes(task["structure"], records[0].output_labels, task["settings"]["band_hz"],
-                                    task["component"])
+        truth = tests.true_modes(records[0].output_labels, task["settings"]["band_hz"], task["component"])
         if task["method"] == "peak_picking":
             final = _peak_picking(records, truth, task["settings"], tables)
         else:

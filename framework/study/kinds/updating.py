@@ -497,8 +497,9 @@ def extra_rows(extra: dict[str, Any]) -> list[dict]:
 def analyses(tables: dict, report: dict) -> dict:
     """Derived tables named in ``report`` (e.g. ``selection``), from the tables only."""
     from framework.report.analyses import run_analyses
+    from framework.study.structure_hooks import with_structure_choices
 
-    return run_analyses(tables, report)
+    return run_analyses(tables, with_structure_choices(report))
 
 
 def figures(tables: dict, out_dir: Path, report: dict) -> list[Path]:
